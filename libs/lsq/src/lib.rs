@@ -1,0 +1,1 @@
+//! lsq: bounded nonlinear least squares (Levenberg–Marquardt) on nalgebra.

@@ -1,0 +1,1 @@
+//! node_runtime: the one place besides node shells that knows DDS.

@@ -1,0 +1,1 @@
+//! sequencer: the procedure sequencer node (pure core + DDS shell).

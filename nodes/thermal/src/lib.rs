@@ -1,0 +1,1 @@
+//! thermal: the thermal-gate node (pure core + DDS shell).
