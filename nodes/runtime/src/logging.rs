@@ -1,0 +1,18 @@
+//! `tracing` set-up for every binary of the suite.
+//!
+//! RustDDS logs through the `log` facade, and chattily (every discovery packet at debug, some
+//! benign conditions at warn). Its records are bridged into `tracing` and held at `error` unless
+//! `RUST_LOG` asks for more, so an operator sees the suite's own messages.
+
+use tracing_subscriber::{EnvFilter, fmt};
+
+/// Default filter: our crates at info, the DDS stack quiet.
+pub const DEFAULT_FILTER: &str = "info,rustdds=error,ros2_client=error,mio=error";
+
+/// Installs the global subscriber (idempotent: a second call is a no-op). Logs go to stderr so
+/// that stdout stays free for a command's real output (tables, JSON).
+pub fn init() {
+    let filter = EnvFilter::try_from_default_env().unwrap_or_else(|_| EnvFilter::new(DEFAULT_FILTER));
+    // `try_init` also installs the log→tracing bridge (tracing-log feature).
+    let _ = fmt().with_env_filter(filter).with_writer(std::io::stderr).with_target(true).try_init();
+}

@@ -1,0 +1,137 @@
+//! [`RosNode`]: one DDS participant + one ROS 2 node, with typed endpoints from the topic table.
+
+use crate::{RuntimeConfig, RuntimeConfigError, SuiteTopic};
+use ros2_client::{
+    Context, ContextOptions, MessageTypeName, Name, Node, NodeName, NodeOptions, Publisher, Subscription,
+};
+use tyre_msgs::RosMessage;
+
+/// Something DDS refused to do, named by node and topic.
+#[derive(Debug, thiserror::Error)]
+pub enum RuntimeError {
+    #[error(transparent)]
+    Config(#[from] RuntimeConfigError),
+    #[error("node {node:?}: could not create the DDS participant on domain {domain_id}: {detail}")]
+    Participant { node: String, domain_id: u16, detail: String },
+    #[error("node {node:?}: invalid node name or namespace: {detail}")]
+    Name { node: String, detail: String },
+    #[error("node {node:?}, topic {topic}: {detail}")]
+    Endpoint { node: String, topic: String, detail: String },
+    #[error("node {node:?}, topic {topic}: carries {expected}, not {requested}")]
+    WrongType { node: String, topic: String, expected: String, requested: String },
+}
+
+/// A suite node's DDS presence. Create it inside a tokio runtime: the ROS 2 spinner (discovery
+/// graph, parameter events) runs as a task on it.
+pub struct RosNode {
+    node: Node,
+    name: String,
+    namespace: String,
+    domain_id: u16,
+    // The context owns the DomainParticipant; keep it alive as long as the node.
+    _context: Context,
+}
+
+impl std::fmt::Debug for RosNode {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("RosNode")
+            .field("name", &self.name)
+            .field("namespace", &self.namespace)
+            .field("domain_id", &self.domain_id)
+            .finish()
+    }
+}
+
+impl RosNode {
+    /// Creates a participant on the configured domain and a node `name` under the namespace.
+    pub fn new(name: &str, cfg: &RuntimeConfig) -> Result<Self, RuntimeError> {
+        cfg.validate()?;
+        let domain_id = cfg.resolved_domain_id()?;
+        let context = Context::with_options(ContextOptions::new().domain_id(domain_id))
+            .map_err(|e| RuntimeError::Participant { node: name.to_owned(), domain_id, detail: format!("{e:?}") })?;
+        let node_name = NodeName::new(&cfg.namespace, name)
+            .map_err(|e| RuntimeError::Name { node: name.to_owned(), detail: format!("{e:?}") })?;
+        let mut node = context
+            .new_node(node_name, NodeOptions::new().enable_rosout(false))
+            .map_err(|e| RuntimeError::Participant { node: name.to_owned(), domain_id, detail: format!("{e:?}") })?;
+        match node.spinner() {
+            Ok(spinner) => {
+                tokio::spawn(async move {
+                    if let Err(e) = spinner.spin().await {
+                        tracing::warn!("ROS 2 spinner stopped: {e:?}");
+                    }
+                });
+            }
+            Err(e) => tracing::warn!("node {name}: no ROS 2 spinner ({e:?}); graph events unavailable"),
+        }
+        tracing::debug!(node = name, namespace = %cfg.namespace, domain_id, "node up");
+        Ok(Self { node, name: name.to_owned(), namespace: cfg.namespace.clone(), domain_id, _context: context })
+    }
+
+    pub fn name(&self) -> &str {
+        &self.name
+    }
+
+    pub fn namespace(&self) -> &str {
+        &self.namespace
+    }
+
+    pub fn domain_id(&self) -> u16 {
+        self.domain_id
+    }
+
+    /// Full ROS name of a suite topic for this node's namespace.
+    pub fn topic_name(&self, topic: SuiteTopic) -> String {
+        topic.full_name(&self.namespace)
+    }
+
+    /// Checks `M` is the topic's type and returns the topic's full name and parsed ROS name.
+    fn checked_name<M: RosMessage>(&self, topic: SuiteTopic) -> Result<(String, Name), RuntimeError> {
+        let full = self.topic_name(topic);
+        let expected = topic.ros_type_name();
+        if expected != M::ros_type_name() {
+            return Err(RuntimeError::WrongType {
+                node: self.name.clone(),
+                topic: full,
+                expected,
+                requested: M::ros_type_name(),
+            });
+        }
+        let name = Name::parse(&full).map_err(|e| self.endpoint_err(topic, format!("bad topic name: {e:?}")))?;
+        Ok((full, name))
+    }
+
+    fn endpoint_err(&self, topic: SuiteTopic, detail: String) -> RuntimeError {
+        RuntimeError::Endpoint { node: self.name.clone(), topic: self.topic_name(topic), detail }
+    }
+
+    /// A typed publisher on a suite topic with the topic's QoS.
+    pub fn publisher<M: RosMessage>(&mut self, topic: SuiteTopic) -> Result<Publisher<M>, RuntimeError> {
+        let (_, name) = self.checked_name::<M>(topic)?;
+        let qos = topic.spec().qos.profile();
+        let t = self
+            .node
+            .create_topic(&name, MessageTypeName::new(M::PACKAGE, M::NAME), &qos)
+            .map_err(|e| self.endpoint_err(topic, format!("{e:?}")))?;
+        self.node.create_publisher::<M>(&t, Some(qos)).map_err(|e| self.endpoint_err(topic, format!("{e:?}")))
+    }
+
+    /// A typed subscription on a suite topic with the topic's QoS.
+    pub fn subscription<M: RosMessage + 'static>(
+        &mut self,
+        topic: SuiteTopic,
+    ) -> Result<Subscription<M>, RuntimeError> {
+        let (_, name) = self.checked_name::<M>(topic)?;
+        let qos = topic.spec().qos.profile();
+        let t = self
+            .node
+            .create_topic(&name, MessageTypeName::new(M::PACKAGE, M::NAME), &qos)
+            .map_err(|e| self.endpoint_err(topic, format!("{e:?}")))?;
+        self.node.create_subscription::<M>(&t, Some(qos)).map_err(|e| self.endpoint_err(topic, format!("{e:?}")))
+    }
+
+    /// The underlying ros2-client node (for graph queries in shells).
+    pub fn ros_node(&self) -> &Node {
+        &self.node
+    }
+}
