@@ -3,9 +3,7 @@
 use serde::{Deserialize, Serialize};
 
 /// `builtin_interfaces/Time`: seconds and nanoseconds since an epoch (rig time or sim time).
-#[derive(
-    Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord, Hash, Default, Serialize, Deserialize,
-)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord, Hash, Default, Serialize, Deserialize)]
 pub struct Time {
     pub sec: i32,
     pub nanosec: u32,
@@ -22,10 +20,7 @@ impl Time {
         let total_ns = (t_s * 1e9).round();
         let sec = (total_ns / 1e9).floor();
         let nanosec = (total_ns - sec * 1e9) as u32;
-        Self {
-            sec: sec.min(i32::MAX as f64) as i32,
-            nanosec,
-        }
+        Self { sec: sec.min(i32::MAX as f64) as i32, nanosec }
     }
 
     /// Seconds as `f64`.
@@ -43,9 +38,6 @@ impl Time {
 
     /// From nanoseconds since the epoch.
     pub fn from_nanos(ns: u64) -> Self {
-        Self {
-            sec: (ns / 1_000_000_000).min(i32::MAX as u64) as i32,
-            nanosec: (ns % 1_000_000_000) as u32,
-        }
+        Self { sec: (ns / 1_000_000_000).min(i32::MAX as u64) as i32, nanosec: (ns % 1_000_000_000) as u32 }
     }
 }

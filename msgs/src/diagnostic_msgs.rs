@@ -22,7 +22,7 @@ pub struct DiagnosticStatus {
     pub values: Vec<KeyValue>,
 }
 
-crate::ros_message!(DiagnosticStatus, "diagnostic_msgs", "DiagnosticStatus");
+crate::ros_message!(DiagnosticStatus, "diagnostic_msgs", "DiagnosticStatus", [OK, WARN, ERROR, STALE]);
 
 impl DiagnosticStatus {
     pub const OK: u8 = 0;

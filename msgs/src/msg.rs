@@ -29,7 +29,12 @@ pub struct RigSample {
     pub fault_flags: u32,
 }
 
-crate::ros_message!(RigSample, "tyre_msgs", "RigSample");
+crate::ros_message!(
+    RigSample,
+    "tyre_msgs",
+    "RigSample",
+    [FAULT_FORCE, FAULT_TEMPERATURE, FAULT_RADIUS, FAULT_ENVELOPE, FAULT_ESTOP,]
+);
 
 impl RigSample {
     pub const FAULT_FORCE: u32 = 1;
@@ -59,7 +64,12 @@ pub struct RigSetpoint {
     pub sweep_name: String,
 }
 
-crate::ros_message!(RigSetpoint, "tyre_msgs", "RigSetpoint");
+crate::ros_message!(
+    RigSetpoint,
+    "tyre_msgs",
+    "RigSetpoint",
+    [MODE_FREE_ROLLING, MODE_COUPLED, MODE_STATIC, MODE_SAFE,]
+);
 
 impl RigSetpoint {
     pub const MODE_FREE_ROLLING: u8 = 0;
@@ -77,7 +87,7 @@ pub struct ProcedureCommand {
     pub operator: String,
 }
 
-crate::ros_message!(ProcedureCommand, "tyre_msgs", "ProcedureCommand");
+crate::ros_message!(ProcedureCommand, "tyre_msgs", "ProcedureCommand", [START, PAUSE, RESUME, ABORT, ESTOP,]);
 
 impl ProcedureCommand {
     pub const START: u8 = 0;
@@ -104,7 +114,23 @@ pub struct ProcedureState {
     pub estimated_remaining_s: f64,
 }
 
-crate::ros_message!(ProcedureState, "tyre_msgs", "ProcedureState");
+crate::ros_message!(
+    ProcedureState,
+    "tyre_msgs",
+    "ProcedureState",
+    [
+        PHASE_IDLE,
+        PHASE_SWEEP,
+        PHASE_THERMAL_PAUSE,
+        PHASE_FREE_ROLLING_REF,
+        PHASE_SETTLE,
+        PHASE_PAUSED,
+        PHASE_ABORTED,
+        PHASE_ESTOP,
+        PHASE_COMPLETE,
+        PHASE_TYRE_CHANGE,
+    ]
+);
 
 impl ProcedureState {
     pub const PHASE_IDLE: u8 = 0;
@@ -137,7 +163,12 @@ pub struct ThermalState {
     pub fault: String,
 }
 
-crate::ros_message!(ThermalState, "tyre_msgs", "ThermalState");
+crate::ros_message!(
+    ThermalState,
+    "tyre_msgs",
+    "ThermalState",
+    [STATUS_WAITING, STATUS_RELEASED, STATUS_TIMED_OUT, STATUS_FAULT, STATUS_IDLE,]
+);
 
 impl ThermalState {
     pub const STATUS_WAITING: u8 = 0;
@@ -209,7 +240,7 @@ pub struct QualityCheck {
     pub rig_time_s: f64,
 }
 
-crate::ros_message!(QualityCheck, "tyre_msgs", "QualityCheck");
+crate::ros_message!(QualityCheck, "tyre_msgs", "QualityCheck", [OK, WARN, ERROR,]);
 
 impl QualityCheck {
     pub const OK: u8 = 0;

@@ -15,9 +15,6 @@ crate::ros_message!(Header, "std_msgs", "Header");
 impl Header {
     /// Header stamped at `t_s` seconds in the ISO-W frame.
     pub fn iso_w(t_s: f64) -> Self {
-        Self {
-            stamp: Time::from_secs_f64(t_s),
-            frame_id: "iso_w".to_owned(),
-        }
+        Self { stamp: Time::from_secs_f64(t_s), frame_id: "iso_w".to_owned() }
     }
 }
