@@ -5,7 +5,9 @@ use serde::{Deserialize, Serialize};
 /// `builtin_interfaces/Time`: seconds and nanoseconds since an epoch (rig time or sim time).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord, Hash, Default, Serialize, Deserialize)]
 pub struct Time {
+    /// Whole seconds (may be negative).
     pub sec: i32,
+    /// Nanoseconds within the second, 0..999_999_999.
     pub nanosec: u32,
 }
 

@@ -6,6 +6,7 @@ use serde::{Deserialize, Serialize};
 /// `rosgraph_msgs/Clock`: published on `/clock` when the virtual rig runs on simulated time.
 #[derive(Debug, Clone, Copy, PartialEq, Default, Serialize, Deserialize)]
 pub struct Clock {
+    /// The current simulated time.
     pub clock: Time,
 }
 

@@ -6,7 +6,9 @@ use serde::{Deserialize, Serialize};
 /// `std_msgs/Header`: stamp and coordinate frame.
 #[derive(Debug, Clone, PartialEq, Default, Serialize, Deserialize)]
 pub struct Header {
+    /// When the data was taken (rig time or simulated time).
     pub stamp: Time,
+    /// Coordinate frame of the data (`iso_w` for rig data).
     pub frame_id: String,
 }
 
