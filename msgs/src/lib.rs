@@ -18,6 +18,23 @@
 //! - [`introspect`] and [`drift`]: the machinery of the drift test.
 //!
 //! Axes are ISO-W (TYDEX-W); units are in field names or the `.msg` comments.
+//!
+//! ```
+//! use tyre_msgs::cdr::{from_cdr_with_header, to_cdr_with_header};
+//! use tyre_msgs::{RigSample, RosMessage};
+//!
+//! let sample = RigSample { fx_n: -1.5, fault_flags: RigSample::FAULT_ESTOP, ..RigSample::default() };
+//! // What DDS sends and MCAP stores: encapsulation header (CDR little-endian), then the body.
+//! let payload = to_cdr_with_header(&sample)?;
+//! assert_eq!(payload[..4], [0x00, 0x01, 0x00, 0x00]);
+//! assert_eq!(from_cdr_with_header::<RigSample>(&payload)?, sample);
+//!
+//! // The MCAP channel's schema: name, encoding "ros2msg", and this text.
+//! assert_eq!(RigSample::ros_type_name(), "tyre_msgs/msg/RigSample");
+//! let schema = RigSample::schema_text();
+//! assert!(schema.contains("\nMSG: std_msgs/Header\n"));
+//! # Ok::<(), Box<dyn std::error::Error>>(())
+//! ```
 
 pub mod builtin_interfaces;
 pub mod cdr;
