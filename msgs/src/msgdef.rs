@@ -8,6 +8,10 @@
 //! (`QualityCheck`). Names and values are checked the way `rosidl` checks them, so a file that
 //! parses here should also build with `colcon`. Every error names the file and the line.
 //!
+//! Two `rosidl` rules are kept even though they surprise: the first `#` on a line starts a
+//! comment (also inside quotes), and any `=` after the type makes the line a constant (so a
+//! string default cannot contain `=` or `#`).
+//!
 //! Unqualified `Header` is *not* mapped to `std_msgs/Header` (that was a ROS 1 habit); write
 //! `std_msgs/Header`.
 
@@ -405,9 +409,6 @@ pub enum MsgDefErrorKind {
     /// Two fields or constants with the same name.
     #[error("`{0}` is declared twice")]
     Duplicate(String),
-    /// An unterminated quoted string.
-    #[error("unterminated string literal")]
-    UnterminatedString,
 }
 
 /// Parse the text of a `.msg` file for the type `package/name`.
@@ -444,7 +445,12 @@ pub fn parse_msg(package: &str, name: &str, file: &str, text: &str) -> Result<Ms
 
 /// Parse one line into `def` (line numbers are filled in by the caller).
 fn parse_line(def: &mut MsgDef, package: &str, raw: &str) -> Result<(), MsgDefErrorKind> {
-    let (code, comment) = split_comment(raw)?;
+    // Like rosidl, the first `#` starts a comment even inside quotes, so string values cannot
+    // contain `#`; accepting more than rosidl would let a file pass here and fail in colcon.
+    let (code, comment) = match raw.split_once('#') {
+        Some((code, comment)) => (code, Some(comment)),
+        None => (raw, None),
+    };
     let code = code.trim();
     if code.is_empty() {
         return Ok(());
@@ -458,17 +464,11 @@ fn parse_line(def: &mut MsgDef, package: &str, raw: &str) -> Result<(), MsgDefEr
         return Err(MsgDefErrorKind::MissingName(type_token.to_owned()));
     }
 
-    // `NAME=value` or `NAME = value` makes a constant; `name [default]` a field. The name ends at
-    // whitespace or `=`, so a default value that contains `=` (a string) stays a default.
-    let name_end = rest.find(|c: char| c.is_whitespace() || c == '=').unwrap_or(rest.len());
-    let name = &rest[..name_end];
-    let after_name = rest[name_end..].trim_start();
-
-    if def.fields.iter().any(|f| f.name == name) || def.constants.iter().any(|c| c.name == name) {
-        return Err(MsgDefErrorKind::Duplicate(name.to_owned()));
-    }
-
-    if let Some(value_text) = after_name.strip_prefix('=') {
+    // As in rosidl, any `=` after the type makes the line a constant (`NAME=value`,
+    // `NAME = value`); otherwise it is `name [default]`. So a default value cannot contain `=`.
+    if let Some((name, value_text)) = rest.split_once('=') {
+        let name = name.trim_end();
+        check_unique(def, name)?;
         if !is_constant_name(name) {
             return Err(MsgDefErrorKind::BadConstantName(name.to_owned()));
         }
@@ -487,6 +487,9 @@ fn parse_line(def: &mut MsgDef, package: &str, raw: &str) -> Result<(), MsgDefEr
         return Ok(());
     }
 
+    let (name, after_name) = split_first_token(rest);
+    let after_name = after_name.trim();
+    check_unique(def, name)?;
     if !is_field_name(name) {
         return Err(MsgDefErrorKind::BadFieldName(name.to_owned()));
     }
@@ -502,32 +505,11 @@ fn parse_line(def: &mut MsgDef, package: &str, raw: &str) -> Result<(), MsgDefEr
     Ok(())
 }
 
-/// Split a line at the first `#` that is not inside a quoted string.
-fn split_comment(raw: &str) -> Result<(&str, Option<&str>), MsgDefErrorKind> {
-    let mut quote: Option<char> = None;
-    let mut escaped = false;
-    for (i, c) in raw.char_indices() {
-        match quote {
-            Some(q) => {
-                if escaped {
-                    escaped = false;
-                } else if c == '\\' {
-                    escaped = true;
-                } else if c == q {
-                    quote = None;
-                }
-            }
-            None => match c {
-                '#' => return Ok((&raw[..i], Some(&raw[i + 1..]))),
-                '"' | '\'' => quote = Some(c),
-                _ => {}
-            },
-        }
+fn check_unique(def: &MsgDef, name: &str) -> Result<(), MsgDefErrorKind> {
+    if def.fields.iter().any(|f| f.name == name) || def.constants.iter().any(|c| c.name == name) {
+        return Err(MsgDefErrorKind::Duplicate(name.to_owned()));
     }
-    if quote.is_some() {
-        return Err(MsgDefErrorKind::UnterminatedString);
-    }
-    Ok((raw, None))
+    Ok(())
 }
 
 fn split_first_token(s: &str) -> (&str, &str) {
@@ -789,18 +771,18 @@ mod tests {
             "int32 X = -5\n\
              float64 G=9.81\n\
              bool B=true\n\
-             string S=\"a # not a comment\"  # a comment\n\
+             string S=\"a b\"  # a comment\n\
              string U=plain text\n\
              uint8 count 7\n\
              float64[] gains [1.0, 2.5]\n\
              string[2] names [\"a,b\", 'c']\n\
-             string label \"x=y\"\n",
+             string label \"x y\"\n",
         )
         .unwrap();
         assert_eq!(def.constant("X").unwrap().value, Literal::Int(-5));
         assert_eq!(def.constant("G").unwrap().value, Literal::Float(9.81));
         assert_eq!(def.constant("B").unwrap().value, Literal::Bool(true));
-        assert_eq!(def.constant("S").unwrap().value, Literal::Str("a # not a comment".into()));
+        assert_eq!(def.constant("S").unwrap().value, Literal::Str("a b".into()));
         assert_eq!(def.constant("S").unwrap().comment.as_deref(), Some("a comment"));
         assert_eq!(def.constant("U").unwrap().value, Literal::Str("plain text".into()));
         assert_eq!(def.field("count").unwrap().default, Some(Literal::Int(7)));
@@ -812,7 +794,7 @@ mod tests {
             def.field("names").unwrap().default,
             Some(Literal::Array(vec![Literal::Str("a,b".into()), Literal::Str("c".into())]))
         );
-        assert_eq!(def.field("label").unwrap().default, Some(Literal::Str("x=y".into())));
+        assert_eq!(def.field("label").unwrap().default, Some(Literal::Str("x y".into())));
     }
 
     fn error_of(text: &str) -> MsgDefError {
@@ -840,7 +822,10 @@ mod tests {
         assert!(matches!(error_of("a/b/c/D x").kind, MsgDefErrorKind::BadType(_)));
         assert!(matches!(error_of("uint8 a\nuint8 a").kind, MsgDefErrorKind::Duplicate(_)));
         assert!(matches!(error_of("std_msgs/Header h 3").kind, MsgDefErrorKind::DefaultOnMessage(_)));
-        assert!(matches!(error_of("string s \"open").kind, MsgDefErrorKind::UnterminatedString));
+        assert!(matches!(error_of("string s \"open").kind, MsgDefErrorKind::BadValue { .. }));
+        // rosidl's rules, kept on purpose: `#` always starts a comment, `=` always a constant.
+        assert!(matches!(error_of("string S=\"a # b\"").kind, MsgDefErrorKind::BadValue { .. }));
+        assert!(matches!(error_of("string label \"x=y\"").kind, MsgDefErrorKind::BadConstantName(_)));
         assert!(matches!(error_of("float64[2] v [1.0]").kind, MsgDefErrorKind::BadValue { .. }));
         assert!(matches!(error_of("string<=2 s \"abc\"").kind, MsgDefErrorKind::BadValue { .. }));
         let e = parse_msg("Bad", "Test", "x.msg", "").unwrap_err();

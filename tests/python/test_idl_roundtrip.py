@@ -293,3 +293,25 @@ def test_parser_reads_arrays_constants_and_refs():
     assert (d.fields[3].array, d.fields[3].size) == ("bounded", 4)
     assert d.fields[4].string_bound == 8
     assert d.constants[0].value == 3
+
+
+def test_msg_files_pass_the_rosidl_adapter_parser():
+    """The .msg files parse with (mcap_ros2's copy of) rosidl_adapter's parser, the one colcon
+    uses to turn .msg into .idl, and it sees the same fields and constants as tyre_msgs_idl."""
+    from mcap_ros2._vendor.rosidl_adapter.parser import parse_message_string
+
+    for ros_name, d in definitions.items():
+        pkg, _, name = ros_name.split("/")
+        text = (
+            (REPO / "msgs" / "msg" / f"{name}.msg")
+            if pkg == "tyre_msgs"
+            else (REPO / "msgs" / "std" / pkg / "msg" / f"{name}.msg")
+        ).read_text(encoding="utf-8")
+        spec = parse_message_string(pkg, name, text)
+        assert [f.name for f in spec.fields] == [f.name for f in d.fields], ros_name
+        assert [c.name for c in spec.constants] == [c.name for c in d.constants], ros_name
+        assert [c.value for c in spec.constants] == [c.value for c in d.constants], ros_name
+        for theirs, ours in zip(spec.fields, d.fields):
+            base = theirs.type.type if theirs.type.pkg_name is None else f"{theirs.type.pkg_name}/{theirs.type.type}"
+            assert base == ours.base, (ros_name, ours.name)
+            assert theirs.type.is_array == (ours.array is not None), (ros_name, ours.name)

@@ -118,22 +118,8 @@ _ARRAY = re.compile(r"^(.*)\[(<=)?(\d*)\]$")
 
 
 def _strip_comment(line: str) -> str:
-    """Cut the line at the first ``#`` outside quotes."""
-    quote = None
-    escaped = False
-    for i, c in enumerate(line):
-        if quote:
-            if escaped:
-                escaped = False
-            elif c == "\\":
-                escaped = True
-            elif c == quote:
-                quote = None
-        elif c == "#":
-            return line[:i]
-        elif c in "\"'":
-            quote = c
-    return line
+    """Cut the line at the first ``#`` (rosidl does the same, even inside quotes)."""
+    return line.split("#", 1)[0]
 
 
 def _constant_value(ptype: str, text: str, err) -> Any:
@@ -204,9 +190,9 @@ def parse_msg(package: str, name: str, text: str, file: str = "<msg>") -> MsgDef
                 raise err(f"unknown or malformed type {type_token!r}")
             base = f"{ref.group(1) or package}/{ref.group(2)}"
 
-        cm = re.match(r"^([A-Za-z0-9_]+)\s*=\s*(.*)$", rest)
-        if cm:
-            cname, value = cm.group(1), cm.group(2).strip()
+        if "=" in rest:
+            # rosidl: any `=` after the type makes the line a constant.
+            cname, value = (part.strip() for part in rest.split("=", 1))
             if not _CONST_NAME.match(cname):
                 raise err(f"invalid constant name {cname!r}")
             if base not in _PRIMITIVES or array is not None:
