@@ -75,7 +75,7 @@ fn procedure_command() -> ProcedureCommand {
         header: header(5, 6, ""),
         command: ProcedureCommand::ABORT,
         procedure: "gs2mf".to_owned(),
-        operator: "Zoë Ångström".to_owned(),
+        operator_name: "Zoë Ångström".to_owned(),
     }
 }
 

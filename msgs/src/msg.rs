@@ -128,7 +128,7 @@ pub struct ProcedureCommand {
     /// START only: procedure name (e.g. "gs2mf") or file
     pub procedure: String,
     /// who sent it (free text, logged)
-    pub operator: String,
+    pub operator_name: String,
 }
 
 crate::ros_message!(ProcedureCommand, "tyre_msgs", "ProcedureCommand", [START, PAUSE, RESUME, ABORT, ESTOP]);

@@ -94,7 +94,7 @@ EXPECTED: Dict[str, Any] = {
         header=header(5, 6, ""),
         command=types["ProcedureCommand"].ABORT,
         procedure="gs2mf",
-        operator="Zoë Ångström",
+        operator_name="Zoë Ångström",
     ),
     "tyre_msgs/msg/QualityReport": types["QualityReport"](
         header=header(100, 5, ""),

@@ -1,0 +1,166 @@
+//! [`LogReader`]: a suite log read back — messages in log order, typed on demand, and metadata.
+
+use crate::codec;
+use std::{
+    collections::BTreeMap,
+    path::{Path, PathBuf},
+};
+use tyre_msgs::RosMessage;
+
+/// Why a log could not be read. Always names the file.
+#[derive(Debug, thiserror::Error)]
+pub enum LogError {
+    #[error("{path}: cannot read: {source}")]
+    Io { path: PathBuf, source: std::io::Error },
+    #[error("{path}: not a readable MCAP file: {detail}")]
+    NotMcap { path: PathBuf, detail: String },
+    #[error(
+        "{path}: the log ends early ({detail}) after {messages} messages; was the recorder killed? \
+         `tyrerig mcap recover {path}` rescues every complete chunk"
+    )]
+    Truncated { path: PathBuf, detail: String, messages: usize },
+    #[error("{path}: topic {topic:?}, message {index}: {detail}")]
+    Decode { path: PathBuf, topic: String, index: usize, detail: String },
+    #[error("{path}: topic {topic:?} carries {found:?}, not {expected:?}")]
+    WrongType { path: PathBuf, topic: String, found: String, expected: String },
+    #[error("{path}: channel {topic:?} uses message encoding {encoding:?}; only \"cdr\" (ROS 2) is supported")]
+    Encoding { path: PathBuf, topic: String, encoding: String },
+}
+
+/// One recorded message.
+#[derive(Debug, Clone)]
+pub struct LogMessage {
+    pub topic: String,
+    /// ROS 2 type name from the channel's schema (`tyre_msgs/msg/RigSample`).
+    pub ros_type: String,
+    /// When the recorder received it [ns since the UNIX epoch].
+    pub log_time_ns: u64,
+    /// The message's own stamp (rig time) [ns].
+    pub publish_time_ns: u64,
+    /// Encapsulation header + CDR body.
+    pub data: Vec<u8>,
+}
+
+/// Per-topic statistics of a log.
+#[derive(Debug, Clone, PartialEq)]
+pub struct TopicInfo {
+    pub topic: String,
+    pub ros_type: String,
+    pub messages: usize,
+    pub first_log_time_ns: u64,
+    pub last_log_time_ns: u64,
+}
+
+/// A log held in memory, fully checked on open.
+#[derive(Debug)]
+pub struct LogReader {
+    path: PathBuf,
+    messages: Vec<LogMessage>,
+    metadata: BTreeMap<String, BTreeMap<String, String>>,
+}
+
+impl LogReader {
+    /// Reads and checks the whole file (CRCs of chunks included). A file cut short is an error
+    /// that says how to recover it.
+    pub fn open(path: &Path) -> Result<Self, LogError> {
+        let bytes = std::fs::read(path).map_err(|source| LogError::Io { path: path.to_owned(), source })?;
+        Self::from_bytes(path, &bytes)
+    }
+
+    /// As [`LogReader::open`], from bytes already in memory (`path` names them in errors).
+    pub fn from_bytes(path: &Path, bytes: &[u8]) -> Result<Self, LogError> {
+        let p = || path.to_owned();
+        let mut messages = Vec::new();
+        let stream = mcap::MessageStream::new_with_options(bytes, mcap::read::Options::ValidateChunkCrcs.into())
+            .map_err(|e| LogError::NotMcap { path: p(), detail: e.to_string() })?;
+        for m in stream {
+            let m = m.map_err(|e| {
+                if messages.is_empty() && !bytes.starts_with(mcap::MAGIC) {
+                    LogError::NotMcap { path: p(), detail: e.to_string() }
+                } else {
+                    LogError::Truncated { path: p(), detail: e.to_string(), messages: messages.len() }
+                }
+            })?;
+            if m.channel.message_encoding != "cdr" {
+                return Err(LogError::Encoding {
+                    path: p(),
+                    topic: m.channel.topic.clone(),
+                    encoding: m.channel.message_encoding.clone(),
+                });
+            }
+            messages.push(LogMessage {
+                topic: m.channel.topic.clone(),
+                ros_type: m.channel.schema.as_ref().map(|s| s.name.clone()).unwrap_or_default(),
+                log_time_ns: m.log_time,
+                publish_time_ns: m.publish_time,
+                data: m.data.into_owned(),
+            });
+        }
+        let mut metadata = BTreeMap::new();
+        for rec in
+            mcap::read::LinearReader::new(bytes).map_err(|e| LogError::NotMcap { path: p(), detail: e.to_string() })?
+        {
+            if let Ok(mcap::records::Record::Metadata(md)) = rec {
+                metadata.insert(md.name, md.metadata);
+            }
+        }
+        // Chunks are written in log-time order per chunk; sort once so readers see one timeline.
+        messages.sort_by_key(|m| m.log_time_ns);
+        Ok(Self { path: path.to_owned(), messages, metadata })
+    }
+
+    pub fn path(&self) -> &Path {
+        &self.path
+    }
+
+    /// Every message, in log-time order.
+    pub fn messages(&self) -> &[LogMessage] {
+        &self.messages
+    }
+
+    /// Metadata records by name (`tyrerig`, `tyre`, `procedure`, …).
+    pub fn metadata(&self) -> &BTreeMap<String, BTreeMap<String, String>> {
+        &self.metadata
+    }
+
+    /// Topics with their types and message counts, sorted by topic name.
+    pub fn topics(&self) -> Vec<TopicInfo> {
+        let mut by_topic: BTreeMap<&str, TopicInfo> = BTreeMap::new();
+        for m in &self.messages {
+            let e = by_topic.entry(&m.topic).or_insert_with(|| TopicInfo {
+                topic: m.topic.clone(),
+                ros_type: m.ros_type.clone(),
+                messages: 0,
+                first_log_time_ns: m.log_time_ns,
+                last_log_time_ns: m.log_time_ns,
+            });
+            e.messages += 1;
+            e.first_log_time_ns = e.first_log_time_ns.min(m.log_time_ns);
+            e.last_log_time_ns = e.last_log_time_ns.max(m.log_time_ns);
+        }
+        by_topic.into_values().collect()
+    }
+
+    /// All messages of `topic`, decoded as `M`, with their log time, in log order.
+    pub fn typed<M: RosMessage>(&self, topic: &str) -> Result<Vec<(u64, M)>, LogError> {
+        let mut out = Vec::new();
+        for (index, m) in self.messages.iter().filter(|m| m.topic == topic).enumerate() {
+            if m.ros_type != M::ros_type_name() {
+                return Err(LogError::WrongType {
+                    path: self.path.clone(),
+                    topic: topic.to_owned(),
+                    found: m.ros_type.clone(),
+                    expected: M::ros_type_name(),
+                });
+            }
+            let msg = codec::decode::<M>(&m.data, &m.ros_type).map_err(|e| LogError::Decode {
+                path: self.path.clone(),
+                topic: topic.to_owned(),
+                index,
+                detail: e.to_string(),
+            })?;
+            out.push((m.log_time_ns, msg));
+        }
+        Ok(out)
+    }
+}

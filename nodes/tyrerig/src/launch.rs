@@ -1,0 +1,148 @@
+//! Launch files and the node registry: which nodes exist, how each is configured, how it runs.
+//!
+//! A launch file (`launch-config/*.toml`):
+//! ```toml
+//! [runtime]                 # optional: namespace (default "/rig") and domain_id (else ROS_DOMAIN_ID)
+//! namespace = "/rig"
+//!
+//! [[node]]
+//! name = "recorder"         # ROS node name, unique in the file
+//! kind = "recorder"         # which node (see NodeKind)
+//! [node.config]             # the node's own typed config (deny_unknown_fields)
+//! output = "out/run.mcap"
+//! ```
+//! `tyrerig node <name> --config <file>` runs one node of a launch file alone, so a control room
+//! can spread nodes over machines with one shared file.
+
+use anyhow::{Context as _, bail};
+use node_runtime::{RosNode, RuntimeConfig, Shutdown};
+use serde::Deserialize;
+use std::path::{Path, PathBuf};
+
+/// A parsed launch file.
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct LaunchFile {
+    #[serde(default)]
+    pub runtime: RuntimeConfig,
+    #[serde(default, rename = "node")]
+    pub nodes: Vec<NodeEntry>,
+}
+
+/// One `[[node]]` of a launch file.
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct NodeEntry {
+    pub name: String,
+    pub kind: String,
+    #[serde(default)]
+    pub config: toml::Table,
+}
+
+/// Every node kind the suite has.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum NodeKind {
+    Recorder,
+    TestPattern,
+}
+
+impl NodeKind {
+    pub const ALL: [NodeKind; 2] = [NodeKind::Recorder, NodeKind::TestPattern];
+
+    pub fn name(self) -> &'static str {
+        match self {
+            NodeKind::Recorder => "recorder",
+            NodeKind::TestPattern => "test_pattern",
+        }
+    }
+
+    pub fn parse(s: &str) -> Option<Self> {
+        Self::ALL.into_iter().find(|k| k.name() == s)
+    }
+}
+
+impl LaunchFile {
+    /// Reads and validates a launch file; errors name the file, the line where TOML allows,
+    /// the node and the key.
+    pub fn load(path: &Path) -> anyhow::Result<Self> {
+        let text =
+            std::fs::read_to_string(path).with_context(|| format!("{}: cannot read launch file", path.display()))?;
+        let mut file: LaunchFile =
+            toml::from_str(&text).map_err(|e| anyhow::anyhow!("{}: {}", path.display(), e.to_string().trim_end()))?;
+        file.runtime.validate().map_err(|e| anyhow::anyhow!("{}: [runtime]: {e}", path.display()))?;
+        let base = path.parent().unwrap_or(Path::new("."));
+        let mut seen = std::collections::BTreeSet::new();
+        for n in &mut file.nodes {
+            if NodeKind::parse(&n.kind).is_none() {
+                bail!(
+                    "{}: node {:?}: kind {:?} is not a tyrerig node (expected one of: {})",
+                    path.display(),
+                    n.name,
+                    n.kind,
+                    NodeKind::ALL.map(|k| k.name()).join(", ")
+                );
+            }
+            if !seen.insert(n.name.clone()) {
+                bail!("{}: node name {:?} appears twice; node names must be unique", path.display(), n.name);
+            }
+            // Paths in node configs are relative to the launch file, like ROS launch files.
+            n.config.insert("_base_dir".into(), toml::Value::String(base.display().to_string()));
+            // Check the typed config now, before anything starts.
+            typed_config_check(n).map_err(|e| anyhow::anyhow!("{}: node {:?}: {e}", path.display(), n.name))?;
+        }
+        Ok(file)
+    }
+
+    pub fn node(&self, name: &str) -> Option<&NodeEntry> {
+        self.nodes.iter().find(|n| n.name == name)
+    }
+}
+
+fn base_dir(entry: &NodeEntry) -> PathBuf {
+    entry.config.get("_base_dir").and_then(|v| v.as_str()).map(PathBuf::from).unwrap_or_else(|| PathBuf::from("."))
+}
+
+fn config_of<T: serde::de::DeserializeOwned>(entry: &NodeEntry) -> anyhow::Result<T> {
+    let mut table = entry.config.clone();
+    table.remove("_base_dir");
+    T::deserialize(toml::Value::Table(table))
+        .map_err(|e| anyhow::anyhow!("[node.config]: {}", e.to_string().trim_end()))
+}
+
+/// Resolves a config path relative to the launch file's directory.
+fn resolve(entry: &NodeEntry, p: &Path) -> PathBuf {
+    if p.is_absolute() { p.to_owned() } else { base_dir(entry).join(p) }
+}
+
+fn typed_config_check(entry: &NodeEntry) -> anyhow::Result<()> {
+    match NodeKind::parse(&entry.kind) {
+        Some(NodeKind::Recorder) => {
+            let c: recorder::RecorderConfig = config_of(entry)?;
+            c.validate()?;
+        }
+        Some(NodeKind::TestPattern) => {
+            let _: test_pattern::TestPatternConfig = config_of(entry)?;
+        }
+        None => bail!("unknown node kind {:?}", entry.kind),
+    }
+    Ok(())
+}
+
+/// Runs one node until it finishes or `shutdown` fires. Creates its own DDS participant.
+pub async fn run_node(entry: &NodeEntry, runtime: &RuntimeConfig, shutdown: Shutdown) -> anyhow::Result<()> {
+    let node = RosNode::new(&entry.name, runtime)?;
+    match NodeKind::parse(&entry.kind) {
+        Some(NodeKind::Recorder) => {
+            let mut c: recorder::RecorderConfig = config_of(entry)?;
+            c.output = resolve(entry, &c.output);
+            let stats = recorder::shell::run(node, c, shutdown).await?;
+            tracing::info!(node = entry.name, messages = stats.messages, "recorder stopped");
+        }
+        Some(NodeKind::TestPattern) => {
+            let c: test_pattern::TestPatternConfig = config_of(entry)?;
+            test_pattern::run(node, c, shutdown).await?;
+        }
+        None => bail!("unknown node kind {:?}", entry.kind),
+    }
+    Ok(())
+}
