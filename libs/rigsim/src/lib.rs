@@ -1,1 +1,67 @@
-//! rigsim: the virtual flat-track rig simulation core (pure, deterministic, time as data).
+//! rigsim: the virtual flat-track rig's simulation core (pure, deterministic, time as data).
+//!
+//! [`VirtualRig`] takes `tyre_msgs::msg::RigSetpoint`s ([`VirtualRig::apply_setpoint`]),
+//! integrates at a fixed internal step (`internal_rate_hz`, ≥ 1 kHz) and returns
+//! `tyre_msgs::msg::RigSample`s at the publish rate (100 Hz default, up to 1 kHz) from
+//! [`VirtualRig::step`] / [`VirtualRig::run_until`]. It reads no clock and does no I/O: a wrapper
+//! decides whether simulated time runs in real time or accelerated. The same config and seed
+//! give a byte-identical sample stream. One TOML file ([`RigConfig`],
+//! `launch-config/virtual_rig.toml`) describes the tyre, the rig and every effect.
+//!
+//! # Physics
+//! Always on:
+//! - **Steady state**: MF-Tyre 6.1 (`mftyre`, use mode 111) forces and moments, loaded radius
+//!   (DSTWOWHC, quantised to the rig's 0.1 mm) and effective rolling radius (wheel speed).
+//! - **Rig**: rate/acceleration-limited servos for slip angle and slip ratio, rate limits for
+//!   load, camber and belt speed (profiles `mts_flattrac`, `calspan_tirf`), a first-order
+//!   pressure regulator (~20 s to settle), the envelope (refused setpoints send the rig safe),
+//!   free-rolling (un-coupled) vs coupled drive, static mode (wheel locked, belt moved: FX =
+//!   −Cx·displacement up to the friction limit) and standstill steering (no rolling, so the
+//!   relaxed slip does not move until the belt runs again: a step-steer).
+//!
+//! Switchable effects ([`Effects`], names as in the config and `--effects`):
+//! - `transient`: first-order lateral and longitudinal relaxation in travelled distance,
+//!   dα'/ds = (α − α')/σy(α'), with σ falling with slip from σ0 (0.6 m) to 0.15 m at 4°
+//!   (Rill's tyre, thesis Fig. 3.6.2-G). Fast sweeps show mechanical hysteresis at zero slip.
+//! - `thermal`: three surface zones (TRDTEMPI/C/O, shares shifted by camber) over a bulk node,
+//!   heated by sliding power √(PX² + PY²) (reference §3) and rolling loss, cooled by speed-
+//!   dependent convection and by contact with the belt (held near ambient by its bearing), plus
+//!   a fast flash temperature that only the lasers see.
+//! - `thermal_grip`: λμ = 1 − c·(T − T_opt)² and λK = 1 − k·(T − T_opt) at the grip temperature
+//!   (surface/bulk mix): an overheated tyre loses grip.
+//! - `wear`: tread loss ∝ sliding energy; DSTWOWHC falls with it; the worn tyre gets a higher
+//!   λK (less tread shuffle) and λC (more drop-off after the peak).
+//! - `break_in`: a new tyre lacks ~12 % grip, recovered exponentially with severe sliding
+//!   energy (thesis: +14.2 % peak FX over the first five BrkDrv sweeps).
+//! - `noise`: Gaussian sensor noise per channel, extra FX/MXW/MYW/MZW noise with the drive
+//!   coupled, and slip-ratio controller wander that grows below the smooth rate (10 %/s).
+//! - `chatter`: a rig vibration on the forces at high load and slip once the tyre is worn.
+//! - `rim_slip`: above 60 %/s of slip-ratio change the tyre turns on the rim: the tread's slip
+//!   ratio lags the rim's (measured) one.
+//!
+//! With every effect off the samples equal the steady-state MF model at the rig's actual
+//! (actuator-limited) inputs.
+//!
+//! [`calibration`] runs the thesis's comparison sweeps (Tables 3.6.2-H and 3.6.2-I) and the
+//! warm-up and wear checks on the default tyre; `tyrerig rig calibrate` prints them.
+//!
+//! # Speed
+//! Actuators and relaxation run every internal step; the tyre model, temperatures and wear run
+//! at `model_rate_hz` (and whenever a sample is due). See the `step` benchmark.
+
+pub mod calibration;
+mod config;
+mod noise;
+mod rig;
+mod thermal;
+
+pub use config::{
+    BreakInParams, ChatterParams, ConfigError, DEFAULT_TYRE_FILE, Effects, EnvironmentSection, NoiseParams, RigConfig,
+    RigLimits, RigProfile, RigSection, RimSlipParams, ThermalGripParams, ThermalParams, TransientParams, TyreSection,
+    UnknownEffect, WearParams, load_capacity_kg, nominal_load_n,
+};
+pub use rig::{RigError, SetpointRefusal, TruthState, VirtualRig};
+
+/// Re-exported so users of the core need not depend on `tyre_msgs` / `mftyre` for the basics.
+pub use mftyre::TyreParams;
+pub use tyre_msgs::msg::{RigSample, RigSetpoint};
