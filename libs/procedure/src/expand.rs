@@ -239,10 +239,13 @@ impl Builder {
             pressure_bar: start.pressure_bar,
             ..Setpoint::default()
         });
+        let mut group = group;
         if (cur.pressure_bar - start.pressure_bar).abs() > 1e-9 {
             let pc = prim::pressure_change(cur, start.pressure_bar, lim.pressure_change_s);
             let name = pc.type_name.clone();
             self.push_raw(ctx, pc, name, group);
+            // A completed pressure change is not repeated when the sweep after it restarts.
+            group = self.steps.len();
         }
         let cur = self.cur.unwrap_or(cur);
         let longitudinal = seg.kind == StepKind::Sweep && start.mode == RigMode::Coupled;

@@ -1,0 +1,102 @@
+//! The sequencer's typed configuration (TOML, `deny_unknown_fields`, [`SequencerConfig::validate`]).
+
+use procedure::RigLimits;
+use serde::{Deserialize, Serialize};
+
+/// Sequencer configuration.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct SequencerConfig {
+    /// Rate the shell calls `step` at and streams setpoints [Hz].
+    pub control_rate_hz: f64,
+    /// `ProcedureState` is published on change and at least this often [s] (2 Hz).
+    pub state_period_s: f64,
+    /// A `ThermalState` older than this (by its stamp, in rig time) cannot release a pause [s].
+    pub thermal_stale_after_s: f64,
+    /// A release must be judged at least this long after the pause began [s]: a gate still
+    /// open from before the sweep has not seen the sweep's heat yet.
+    pub min_thermal_pause_s: f64,
+    /// Pause length assumed for the ETA until pauses have been observed [s].
+    pub default_pause_estimate_s: f64,
+    /// The rig envelope: setpoints outside it are refused. Its profile limits also shape the
+    /// ramps the sequencer builds itself (pause, resume).
+    pub envelope: RigLimits,
+}
+
+impl Default for SequencerConfig {
+    fn default() -> Self {
+        Self {
+            control_rate_hz: 100.0,
+            state_period_s: 0.5,
+            thermal_stale_after_s: 2.0,
+            min_thermal_pause_s: 1.0,
+            default_pause_estimate_s: 30.0,
+            envelope: RigLimits::default(),
+        }
+    }
+}
+
+/// A configuration value out of range.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+#[error("sequencer config `{key}`: {message}")]
+pub struct ConfigError {
+    /// The key.
+    pub key: &'static str,
+    /// What was expected.
+    pub message: String,
+}
+
+impl SequencerConfig {
+    /// Parse from TOML text (errors carry toml's line/column in the message).
+    pub fn from_toml(src: &str) -> Result<Self, ConfigError> {
+        let cfg: Self = toml::from_str(src).map_err(|e| ConfigError { key: "toml", message: e.to_string() })?;
+        cfg.validate()?;
+        Ok(cfg)
+    }
+
+    /// Check ranges.
+    pub fn validate(&self) -> Result<(), ConfigError> {
+        let pos = [
+            ("control_rate_hz", self.control_rate_hz),
+            ("state_period_s", self.state_period_s),
+            ("thermal_stale_after_s", self.thermal_stale_after_s),
+        ];
+        for (key, v) in pos {
+            if !(v.is_finite() && v > 0.0) {
+                return Err(ConfigError { key, message: format!("expected a positive number, got {v}") });
+            }
+        }
+        for (key, v) in [
+            ("min_thermal_pause_s", self.min_thermal_pause_s),
+            ("default_pause_estimate_s", self.default_pause_estimate_s),
+        ] {
+            if !(v.is_finite() && v >= 0.0) {
+                return Err(ConfigError { key, message: format!("expected a number ≥ 0, got {v}") });
+            }
+        }
+        self.envelope.validate().map_err(|message| ConfigError { key: "envelope", message })
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn defaults_validate_and_toml_round_trip() {
+        let c = SequencerConfig::default();
+        c.validate().unwrap();
+        let s = toml::to_string(&c).unwrap();
+        assert_eq!(SequencerConfig::from_toml(&s).unwrap(), c);
+    }
+
+    #[test]
+    fn rejects_unknown_and_bad_values() {
+        let e = SequencerConfig::from_toml("control_rate_hz = 100.0\nfoo = 1\n").unwrap_err();
+        assert!(e.message.contains("foo"), "{e}");
+        let e = SequencerConfig::from_toml("state_period_s = 0.0\n").unwrap_err();
+        assert_eq!(e.key, "state_period_s");
+        let e = SequencerConfig::from_toml("[envelope]\nmax_fz_n = -1.0\n").unwrap_err();
+        assert_eq!(e.key, "envelope");
+    }
+}
