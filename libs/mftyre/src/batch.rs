@@ -62,11 +62,7 @@ impl BatchInput<'_> {
         ];
         for (column, s) in cols {
             if !s.is_empty() && s.len() != n {
-                return Err(BatchLengthError {
-                    column,
-                    len: s.len(),
-                    expected: n,
-                });
+                return Err(BatchLengthError { column, len: s.len(), expected: n });
             }
         }
         Ok(n)
@@ -128,9 +124,35 @@ pub struct BatchOutput {
 macro_rules! for_each_column {
     ($m:ident) => {
         $m!(
-            fx_n, fy_n, fz_n, mx_nm, my_nm, mz_nm, kappa, alpha_rad, gamma_rad, phit_per_m, vx_mps,
-            p_pa, re_m, rho_m, contact_length_m, trail_m, mux, muy, omega_radps, rl_m,
-            contact_width_m, mzr_nm, cx_npm, cy_npm, cz_npm, kya_nprad, sigmax_m, sigmay_m, kxk_n,
+            fx_n,
+            fy_n,
+            fz_n,
+            mx_nm,
+            my_nm,
+            mz_nm,
+            kappa,
+            alpha_rad,
+            gamma_rad,
+            phit_per_m,
+            vx_mps,
+            p_pa,
+            re_m,
+            rho_m,
+            contact_length_m,
+            trail_m,
+            mux,
+            muy,
+            omega_radps,
+            rl_m,
+            contact_width_m,
+            mzr_nm,
+            cx_npm,
+            cy_npm,
+            cz_npm,
+            kya_nprad,
+            sigmax_m,
+            sigmay_m,
+            kxk_n,
             clamped
         )
     };

@@ -16,16 +16,11 @@ mod model;
 mod params;
 mod tir;
 
-pub use batch::{
-    BatchInput, BatchLengthError, BatchOutput, evaluate_batch, evaluate_batch_scaled,
-    pure_fy_batch,
-};
-pub use model::{
-    Clamped, MfInput, MfOutput, UseMode, UseModeError, evaluate, evaluate_scaled, pure_fx, pure_fy,
-};
+pub use batch::{BatchInput, BatchLengthError, BatchOutput, evaluate_batch, evaluate_batch_scaled, pure_fy_batch};
+pub use model::{Clamped, MfInput, MfOutput, UseMode, UseModeError, evaluate, evaluate_scaled, pure_fx, pure_fy};
 pub use params::{
-    Aligning, CoefGroup, Combined, ContactPatch, Dimension, Inertia, Limits, ModelParams,
-    OperatingConditions, OtherEntry, Overturning, Pressure, PureFx, PureFy, Rolling,
-    ScalingFactors, Structural, TurnSlip, TyreParams, Vertical,
+    Aligning, CoefGroup, Combined, ContactPatch, Dimension, Inertia, Limits, ModelParams, OperatingConditions,
+    OtherEntry, Overturning, Pressure, PureFx, PureFy, Rolling, ScalingFactors, Structural, TurnSlip, TyreParams,
+    Vertical,
 };
 pub use tir::{ExtraSection, TirError, TirValue};

@@ -64,9 +64,7 @@ impl std::str::FromStr for UseMode {
             "221" => UseMode::M221,
             "222" => UseMode::M222,
             other => {
-                return Err(UseModeError {
-                    given: other.to_owned(),
-                });
+                return Err(UseModeError { given: other.to_owned() });
             }
         })
     }
@@ -91,26 +89,17 @@ impl std::fmt::Display for UseMode {
 impl UseMode {
     /// Inputs are clamped to the `.tir` ranges and the low-speed model applies.
     pub fn limits_check(self) -> bool {
-        matches!(
-            self,
-            UseMode::M111 | UseMode::M112 | UseMode::M121 | UseMode::M122
-        )
+        matches!(self, UseMode::M111 | UseMode::M112 | UseMode::M121 | UseMode::M122)
     }
 
     /// α* = tan α·sgn Vx and γ* = sin γ instead of α and γ.
     pub fn alpha_star(self) -> bool {
-        matches!(
-            self,
-            UseMode::M121 | UseMode::M122 | UseMode::M221 | UseMode::M222
-        )
+        matches!(self, UseMode::M121 | UseMode::M122 | UseMode::M221 | UseMode::M222)
     }
 
     /// Combined-slip weighting applies (otherwise pure-slip forces and moments).
     pub fn combined(self) -> bool {
-        matches!(
-            self,
-            UseMode::M111 | UseMode::M121 | UseMode::M211 | UseMode::M221
-        )
+        matches!(self, UseMode::M111 | UseMode::M121 | UseMode::M211 | UseMode::M221)
     }
 }
 
@@ -165,9 +154,7 @@ impl Clamped {
 impl std::ops::BitOr for Clamped {
     type Output = Clamped;
     fn bitor(self, rhs: Clamped) -> Clamped {
-        Clamped {
-            bits: self.bits | rhs.bits,
-        }
+        Clamped { bits: self.bits | rhs.bits }
     }
 }
 
@@ -338,11 +325,7 @@ fn prepare(p: &TyreParams, mode: UseMode, input: &MfInput) -> Prepared {
     let mut kappa_out = kappa;
     let mut alpha = input.alpha_rad;
     let mut gamma = input.gamma_rad;
-    let mut press = if input.p_pa == 0.0 {
-        p.operating.inflpres
-    } else {
-        input.p_pa
-    };
+    let mut press = if input.p_pa == 0.0 { p.operating.inflpres } else { input.p_pa };
     let mut fz = u_fz;
     let mut fz_low = u_fz;
     let mut reduction_smooth = 1.0;
@@ -383,19 +366,7 @@ fn prepare(p: &TyreParams, mode: UseMode, input: &MfInput) -> Prepared {
             fz_low = 0.0;
         }
     }
-    Prepared {
-        fz,
-        fz_low,
-        u_fz,
-        kappa,
-        kappa_out,
-        alpha,
-        gamma,
-        vcx,
-        press,
-        reduction_smooth,
-        clamped,
-    }
+    Prepared { fz, fz_low, u_fz, kappa, kappa_out, alpha, gamma, vcx, press, reduction_smooth, clamped }
 }
 
 /// Quantities shared by all force and moment equations.
@@ -419,24 +390,13 @@ fn basic(p: &TyreParams, s: &ScalingFactors, mode: UseMode, x: &Prepared) -> Bas
     let nompres = p.operating.nompres;
     let dpi = (x.press - nompres) / nompres;
     let tan_alpha = x.alpha.tan();
-    let (alpha_s, gamma_s) = if mode.alpha_star() {
-        (tan_alpha * sgn1(x.vcx), x.gamma.sin())
-    } else {
-        (x.alpha, x.gamma)
-    };
+    let (alpha_s, gamma_s) =
+        if mode.alpha_star() { (tan_alpha * sgn1(x.vcx), x.gamma.sin()) } else { (x.alpha, x.gamma) };
     let vsy = tan_alpha * x.vcx.abs();
     let vc = (x.vcx * x.vcx + vsy * vsy).sqrt();
     let vc_p = vc + EPS;
     let cos_alpha_p = (x.vcx / vc_p).clamp(-1.0, 1.0);
-    Basic {
-        fz0,
-        fz0p,
-        dfz,
-        dpi,
-        alpha_s,
-        gamma_s,
-        cos_alpha_p,
-    }
+    Basic { fz0, fz0p, dfz, dpi, alpha_s, gamma_s, cos_alpha_p }
 }
 
 /// Pure longitudinal force (4.E9–4.E18) → (Fx0, μx, Kxκ).
@@ -454,11 +414,7 @@ fn fx0(p: &TyreParams, s: &ScalingFactors, mode: UseMode, x: &Prepared, b: &Basi
         mux = 0.0;
     }
     let dx = mux * fz;
-    let kxk = fz
-        * (c.pkx1 + c.pkx2 * dfz)
-        * (c.pkx3 * dfz).exp()
-        * (1.0 + pr.ppx1 * dpi + pr.ppx2 * dpi * dpi)
-        * s.lkx;
+    let kxk = fz * (c.pkx1 + c.pkx2 * dfz) * (c.pkx3 * dfz).exp() * (1.0 + pr.ppx1 * dpi + pr.ppx2 * dpi * dpi) * s.lkx;
     let bx = kxk / (cx * dx + EPS * sgn1(dx));
     let shx = (c.phx1 + c.phx2 * dfz) * s.lhx * x.reduction_smooth;
     let svx = fz * (c.pvx1 + c.pvx2 * dfz) * s.lvx * s.lmux * x.reduction_smooth;
@@ -495,10 +451,7 @@ fn kya(p: &TyreParams, s: &ScalingFactors, b: &Basic, fz: f64, gamma_s: f64) -> 
         * b.fz0p
         * (1.0 + pr.ppy1 * b.dpi)
         * (1.0 - c.pky3 * gamma_s.abs())
-        * (c.pky4
-            * ((fz / b.fz0p) / ((c.pky2 + c.pky5 * gamma_s * gamma_s) * (1.0 + pr.ppy2 * b.dpi)))
-                .atan())
-        .sin()
+        * (c.pky4 * ((fz / b.fz0p) / ((c.pky2 + c.pky5 * gamma_s * gamma_s) * (1.0 + pr.ppy2 * b.dpi))).atan()).sin()
         * s.lky
 }
 
@@ -542,15 +495,7 @@ fn fy0_with(
     if fz == 0.0 {
         muy = 0.0;
     }
-    Fy0Terms {
-        fy0,
-        muy,
-        kya,
-        shy,
-        svy,
-        by,
-        cy,
-    }
+    Fy0Terms { fy0, muy, kya, shy, svy, by, cy }
 }
 
 /// Gxα (4.E51–4.E57).
@@ -695,7 +640,12 @@ fn mz_terms(p: &TyreParams, s: &ScalingFactors, mode: UseMode, x: &Prepared, b: 
     let bt = (q.qbz1 + q.qbz2 * dfz + q.qbz3 * dfz * dfz) * (1.0 + q.qbz4 * g + q.qbz5 * g.abs()) * s.lky / s.lmuy;
     let ct = q.qcz1;
     // A60: QDZ3·γ (signed), not QDZ3·|γ*| as in the book.
-    let dt = (q.qdz1 + q.qdz2 * dfz) * (1.0 - pr.ppz1 * dpi) * (1.0 + q.qdz3 * g + q.qdz4 * g * g) * fz * (r0 / b.fz0p) * s.ltr;
+    let dt = (q.qdz1 + q.qdz2 * dfz)
+        * (1.0 - pr.ppz1 * dpi)
+        * (1.0 + q.qdz3 * g + q.qdz4 * g * g)
+        * fz
+        * (r0 / b.fz0p)
+        * s.ltr;
     let mut et = (q.qez1 + q.qez2 * dfz + q.qez3 * dfz * dfz)
         * (1.0 + (q.qez4 + q.qez5 * gs) * FRAC_2_PI * (bt * ct * alphat).atan());
     if mode.limits_check() && et > 1.0 {
@@ -709,17 +659,7 @@ fn mz_terms(p: &TyreParams, s: &ScalingFactors, mode: UseMode, x: &Prepared, b: 
         * s.lmuy
         * sgn(x.vcx)
         * as_.cos();
-    MzTerms {
-        alphar,
-        alphat,
-        bt,
-        ct,
-        dt,
-        et,
-        br,
-        dr,
-        kya_p,
-    }
+    MzTerms { alphar, alphat, bt, ct, dt, et, br, dr, kya_p }
 }
 
 /// Effective rolling radius and spin rate (Besselink eqs. 1 and 7) → (Re, RΩ, Ω).
@@ -773,10 +713,9 @@ fn deflection(p: &TyreParams, x: &Prepared, b: &Basic, omega: f64, r_omega: f64,
     let q_fz1 = ((cz0 * r0 / fz0).powi(2) - 4.0 * v.q_fz2).max(0.0).sqrt();
     let fcx = v.q_fcx * fx / fz0;
     let fcy = v.q_fcy * fy / fz0;
-    let ext = ((1.0 + v.q_v2 * (r0 / p.model.longvl) * omega.abs() - fcx * fcx - fcy * fcy)
-        * (1.0 + v.pfz1 * b.dpi)
-        * fz0)
-        .max(f64::MIN_POSITIVE);
+    let ext =
+        ((1.0 + v.q_v2 * (r0 / p.model.longvl) * omega.abs() - fcx * fcx - fcy * fcy) * (1.0 + v.pfz1 * b.dpi) * fz0)
+            .max(f64::MIN_POSITIVE);
     let fz = x.fz_low;
     // Q_FZ2·x² + Q_FZ1·x = Fz/ext with x = ρ/R0; the root in cancellation-free form.
     let c = fz / ext;
@@ -800,11 +739,7 @@ fn contact_patch(p: &TyreParams, x: &Prepared, b: &Basic) -> (f64, f64) {
     let ncz = v.vertical_stiffness * (1.0 + v.pfz1 * b.dpi);
     // With bottoming the rim carries the load beyond this deflection.
     let room = r0 - p.dimension.rim_radius - v.bottom_offst;
-    let fz = if r0 - x.u_fz / ncz < p.dimension.rim_radius + v.bottom_offst {
-        room * ncz
-    } else {
-        x.u_fz
-    };
+    let fz = if r0 - x.u_fz / ncz < p.dimension.rim_radius + v.bottom_offst { room * ncz } else { x.u_fz };
     let n = (fz / (ncz * r0)).max(0.0);
     let a = r0 * (cp.q_ra2 * n + cp.q_ra1 * n.sqrt());
     let bw = p.dimension.width * (cp.q_rb2 * n + cp.q_rb1 * n.cbrt());
@@ -818,12 +753,7 @@ pub fn evaluate(params: &TyreParams, mode: UseMode, input: &MfInput) -> MfOutput
 
 /// Evaluates the model with `scaling` in place of `params.scaling`, so a simulation can vary
 /// grip and stiffness λs per step without copying the parameter set.
-pub fn evaluate_scaled(
-    params: &TyreParams,
-    scaling: &ScalingFactors,
-    mode: UseMode,
-    input: &MfInput,
-) -> MfOutput {
+pub fn evaluate_scaled(params: &TyreParams, scaling: &ScalingFactors, mode: UseMode, input: &MfInput) -> MfOutput {
     let p = params;
     let s = scaling;
     let x = prepare(p, mode, input);
@@ -867,7 +797,8 @@ pub fn evaluate_scaled(
         let mz = -t * fy_p + mzr + s_arm * fx;
         (fx, fy, mz, t, mzr)
     } else {
-        let t0 = mzt.dt * (mzt.ct * mf_arg(mzt.bt, mzt.alphat, mzt.et).atan()).cos() * b.cos_alpha_p * x.reduction_smooth;
+        let t0 =
+            mzt.dt * (mzt.ct * mf_arg(mzt.bt, mzt.alphat, mzt.et).atan()).cos() * b.cos_alpha_p * x.reduction_smooth;
         let mzr0 = mzt.dr * cos_atan(mzt.br * mzt.alphar) * b.cos_alpha_p * x.reduction_smooth;
         let mz0 = -t0 * fy0_g0 + mzr0;
         (fx0, fy0.fy0, mz0, t0, mzr0)

@@ -544,9 +544,7 @@ impl CoefGroup {
 
     /// The group a `.tir` key belongs to, if it is a typed coefficient.
     pub fn of_key(key: &str) -> Option<CoefGroup> {
-        CoefGroup::ALL
-            .into_iter()
-            .find(|g| g.keys().contains(&key))
+        CoefGroup::ALL.into_iter().find(|g| g.keys().contains(&key))
     }
 }
 
@@ -711,11 +709,7 @@ impl TyreParams {
 
     /// The coefficients of one group as `(key, value)` pairs, in writing order.
     pub fn group_values(&self, group: CoefGroup) -> Vec<(&'static str, f64)> {
-        group
-            .keys()
-            .iter()
-            .filter_map(|k| self.get(k).map(|v| (*k, v)))
-            .collect()
+        group.keys().iter().filter_map(|k| self.get(k).map(|v| (*k, v))).collect()
     }
 
     /// Nominal (rated) wheel load FNOMIN, N (unscaled).

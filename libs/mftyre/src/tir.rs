@@ -75,7 +75,9 @@ pub enum TirError {
         file: String,
     },
     /// A Magic Formula version this crate does not implement.
-    #[error("{file}:{line}: FITTYP = {value} ({version}) is not supported: only MF-Tyre 6.1 (FITTYP = 61) is implemented")]
+    #[error(
+        "{file}:{line}: FITTYP = {value} ({version}) is not supported: only MF-Tyre 6.1 (FITTYP = 61) is implemented"
+    )]
     UnsupportedVersion {
         /// File name.
         file: String,
@@ -171,10 +173,7 @@ impl ExtraSection {
 
     /// The value of `key` (case-insensitive), if the section has it.
     pub fn get(&self, key: &str) -> Option<TirValue> {
-        self.entries()
-            .into_iter()
-            .find(|(k, _)| k.eq_ignore_ascii_case(key))
-            .map(|(_, v)| v)
+        self.entries().into_iter().find(|(k, _)| k.eq_ignore_ascii_case(key)).map(|(_, v)| v)
     }
 
     /// Sets `key` to `value`: replaces the first line defining it, or appends one.
@@ -223,10 +222,7 @@ const NON_COEF_SECTIONS: &[&str] = &["MDI_HEADER", "UNITS"];
 enum Line<'a> {
     Blank,
     Section(&'a str),
-    Entry {
-        key: &'a str,
-        value: &'a str,
-    },
+    Entry { key: &'a str, value: &'a str },
 }
 
 /// Splits one line (line end already removed) into its syntactic form.
@@ -356,11 +352,7 @@ impl TyreParams {
                 Ok(Line::Section(_)) => continue,
                 Ok(Line::Entry { key, value }) => (key, value),
                 Err(()) => {
-                    return Err(TirError::MalformedLine {
-                        file,
-                        line: line_no,
-                        text: raw.trim().to_owned(),
-                    });
+                    return Err(TirError::MalformedLine { file, line: line_no, text: raw.trim().to_owned() });
                 }
             };
             let key_upper = key.to_ascii_uppercase();
@@ -381,25 +373,12 @@ impl TyreParams {
                 continue;
             }
 
-            let coef_group = if NON_COEF_SECTIONS.contains(&section.as_str()) {
-                None
-            } else {
-                CoefGroup::of_key(&key_upper)
-            };
+            let coef_group =
+                if NON_COEF_SECTIONS.contains(&section.as_str()) { None } else { CoefGroup::of_key(&key_upper) };
             if let Some(group) = coef_group {
-                let spec_key = group
-                    .keys()
-                    .iter()
-                    .copied()
-                    .find(|k| *k == key_upper)
-                    .unwrap_or("");
+                let spec_key = group.keys().iter().copied().find(|k| *k == key_upper).unwrap_or("");
                 if let Some(first) = seen.get(spec_key) {
-                    return Err(TirError::DuplicateKey {
-                        file,
-                        line: line_no,
-                        first_line: *first,
-                        key: key_upper,
-                    });
+                    return Err(TirError::DuplicateKey { file, line: line_no, first_line: *first, key: key_upper });
                 }
                 seen.insert(spec_key, line_no);
                 match parse_number(value_text) {
@@ -432,11 +411,7 @@ impl TyreParams {
                         expected,
                     });
                 }
-                params.other.push(OtherEntry {
-                    section: section.clone(),
-                    key: key.to_owned(),
-                    value,
-                });
+                params.other.push(OtherEntry { section: section.clone(), key: key.to_owned(), value });
             }
         }
 
@@ -483,10 +458,7 @@ impl TyreParams {
     /// Reads a `.tir` file from disk.
     pub fn read_tir(path: &Path) -> Result<Self, TirError> {
         let name = path.display().to_string();
-        let bytes = std::fs::read(path).map_err(|source| TirError::Io {
-            file: name.clone(),
-            source,
-        })?;
+        let bytes = std::fs::read(path).map_err(|source| TirError::Io { file: name.clone(), source })?;
         // Some tools write Latin-1 comments; the numeric content is ASCII either way.
         let text = String::from_utf8_lossy(&bytes);
         Self::from_tir_str(&text, &name)
@@ -497,11 +469,7 @@ impl TyreParams {
         self.validate_with_lines(&self.source, &HashMap::new())
     }
 
-    fn validate_with_lines(
-        &self,
-        file: &str,
-        lines: &HashMap<&'static str, usize>,
-    ) -> Result<(), TirError> {
+    fn validate_with_lines(&self, file: &str, lines: &HashMap<&'static str, usize>) -> Result<(), TirError> {
         let positive = [
             ("FNOMIN", self.vertical.fnomin),
             ("UNLOADED_RADIUS", self.dimension.unloaded_radius),
@@ -556,10 +524,7 @@ impl TyreParams {
     /// reads back to identical values. Extra sections follow the known ones, verbatim.
     pub fn to_tir_string(&self) -> String {
         let mut out = String::new();
-        let specs: Vec<&KeySpec> = CoefGroup::ALL
-            .iter()
-            .flat_map(|g| g.specs().iter())
-            .collect();
+        let specs: Vec<&KeySpec> = CoefGroup::ALL.iter().flat_map(|g| g.specs().iter()).collect();
         for section in KNOWN_SECTIONS {
             let _ = writeln!(out, "${:-<70}", section.to_ascii_lowercase());
             let _ = writeln!(out, "[{section}]");

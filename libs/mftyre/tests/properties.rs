@@ -17,9 +17,30 @@ fn symmetric() -> &'static TyreParams {
 
 fn all_finite(o: &MfOutput) -> bool {
     [
-        o.fx_n, o.fy_n, o.fz_n, o.mx_nm, o.my_nm, o.mz_nm, o.kappa, o.re_m, o.rho_m,
-        o.contact_length_m, o.trail_m, o.mux, o.muy, o.omega_radps, o.rl_m, o.contact_width_m,
-        o.mzr_nm, o.cx_npm, o.cy_npm, o.cz_npm, o.kya_nprad, o.sigmax_m, o.sigmay_m, o.kxk_n,
+        o.fx_n,
+        o.fy_n,
+        o.fz_n,
+        o.mx_nm,
+        o.my_nm,
+        o.mz_nm,
+        o.kappa,
+        o.re_m,
+        o.rho_m,
+        o.contact_length_m,
+        o.trail_m,
+        o.mux,
+        o.muy,
+        o.omega_radps,
+        o.rl_m,
+        o.contact_width_m,
+        o.mzr_nm,
+        o.cx_npm,
+        o.cy_npm,
+        o.cz_npm,
+        o.kya_nprad,
+        o.sigmax_m,
+        o.sigmay_m,
+        o.kxk_n,
     ]
     .iter()
     .all(|v| v.is_finite())
@@ -161,33 +182,65 @@ fn combined_equals_pure_without_the_other_slip() {
 #[test]
 fn limits_are_clamped_and_flagged() {
     let p = params();
-    let x = MfInput { fz_n: 30000.0, alpha_rad: 1.2, kappa: 2.0, gamma_rad: 0.3, p_pa: 500000.0, vx_mps: 16.6, ..Default::default() };
+    let x = MfInput {
+        fz_n: 30000.0,
+        alpha_rad: 1.2,
+        kappa: 2.0,
+        gamma_rad: 0.3,
+        p_pa: 500000.0,
+        vx_mps: 16.6,
+        ..Default::default()
+    };
     let o = evaluate(p, UseMode::M111, &x);
     use mftyre::Clamped;
     for flag in [Clamped::FZ, Clamped::ALPHA, Clamped::KAPPA, Clamped::GAMMA, Clamped::PRESSURE] {
         assert!(o.clamped.contains(flag), "{flag:?} not set: {:?}", o.clamped);
     }
     assert_eq!(o.p_pa, 400000.0);
-    let at_limit = evaluate(p, UseMode::M111, &MfInput { fz_n: 18000.0, alpha_rad: 0.96, kappa: 1.0, gamma_rad: 0.105, p_pa: 400000.0, vx_mps: 16.6, ..Default::default() });
+    let at_limit = evaluate(
+        p,
+        UseMode::M111,
+        &MfInput {
+            fz_n: 18000.0,
+            alpha_rad: 0.96,
+            kappa: 1.0,
+            gamma_rad: 0.105,
+            p_pa: 400000.0,
+            vx_mps: 16.6,
+            ..Default::default()
+        },
+    );
     assert_eq!(o.fy_n, at_limit.fy_n);
     let unclamped = evaluate(p, UseMode::M211, &x);
     assert!(unclamped.clamped.is_empty());
     let slow = evaluate(p, UseMode::M111, &MfInput { fz_n: 5000.0, vx_mps: 0.5, ..Default::default() });
     assert!(slow.clamped.contains(Clamped::LOW_SPEED));
-    let standstill = evaluate(p, UseMode::M111, &MfInput { fz_n: 5000.0, vx_mps: 0.0, kappa: 0.1, alpha_rad: 0.1, ..Default::default() });
+    let standstill = evaluate(
+        p,
+        UseMode::M111,
+        &MfInput { fz_n: 5000.0, vx_mps: 0.0, kappa: 0.1, alpha_rad: 0.1, ..Default::default() },
+    );
     assert!(all_finite(&standstill), "{standstill:?}");
 }
 
 #[test]
 fn spot_values_from_the_reference_readme() {
     let p = params();
-    let o = evaluate(p, UseMode::M111, &MfInput { fz_n: 6752.0, alpha_rad: 4f64.to_radians(), vx_mps: 16.6, p_pa: 260000.0, ..Default::default() });
+    let o = evaluate(
+        p,
+        UseMode::M111,
+        &MfInput { fz_n: 6752.0, alpha_rad: 4f64.to_radians(), vx_mps: 16.6, p_pa: 260000.0, ..Default::default() },
+    );
     assert!((o.fy_n - -6320.515).abs() < 1e-3, "{}", o.fy_n);
     assert!((o.mz_nm - 65.295).abs() < 1e-3, "{}", o.mz_nm);
     assert!((o.mx_nm - 47.392).abs() < 1e-3, "{}", o.mx_nm);
     assert!((o.my_nm - -27.744).abs() < 1e-3, "{}", o.my_nm);
     assert!((o.fx_n - -29.72).abs() < 1e-2, "{}", o.fx_n);
-    let o = evaluate(p, UseMode::M111, &MfInput { fz_n: 6752.0, kappa: 0.1, vx_mps: 16.6, p_pa: 260000.0, ..Default::default() });
+    let o = evaluate(
+        p,
+        UseMode::M111,
+        &MfInput { fz_n: 6752.0, kappa: 0.1, vx_mps: 16.6, p_pa: 260000.0, ..Default::default() },
+    );
     assert!((o.fx_n - 8308.06).abs() < 1e-2, "{}", o.fx_n);
 }
 

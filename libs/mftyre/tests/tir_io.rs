@@ -15,8 +15,7 @@ fn all_tyre_files() -> Vec<std::path::PathBuf> {
 }
 
 fn sample_text() -> String {
-    std::fs::read_to_string(common::tyres_dir().join("MagicFormula61_Paramerters.tir"))
-        .expect("sample tyre")
+    std::fs::read_to_string(common::tyres_dir().join("MagicFormula61_Paramerters.tir")).expect("sample tyre")
 }
 
 fn read(text: &str) -> Result<TyreParams, TirError> {
@@ -52,16 +51,7 @@ fn every_project_file_round_trips_exactly() {
 #[test]
 fn awkward_values_round_trip_bit_exactly() {
     let mut p = common::sample_tyre();
-    let values = [
-        0.1 + 0.2,
-        -1.0e-300,
-        6.02214076e23,
-        f64::MIN_POSITIVE,
-        -0.0,
-        1.0 / 3.0,
-        123456789.123456789,
-        4e-05,
-    ];
+    let values = [0.1 + 0.2, -1.0e-300, 6.02214076e23, f64::MIN_POSITIVE, -0.0, 1.0 / 3.0, 123456789.123456789, 4e-05];
     for (i, v) in values.into_iter().enumerate() {
         let key = CoefGroup::PureFy.keys()[i];
         p.set(key, v).expect("set");
@@ -85,14 +75,8 @@ fn sample_values_and_nominals() {
     assert_eq!(p.get("pky1"), Some(27.42326), "keys are case-insensitive");
     assert_eq!(p.get("QSY4"), Some(4e-05));
     assert_eq!(p.mass_kg(), 10.0, "MASS from [INERTIA], not the unit name in [UNITS]");
-    assert_eq!(
-        p.other_value("UNITS", "MASS"),
-        Some(&TirValue::Text("kg".into()))
-    );
-    assert_eq!(
-        p.other_value("MODEL", "TYRESIDE"),
-        Some(&TirValue::Text("RIGHT".into()))
-    );
+    assert_eq!(p.other_value("UNITS", "MASS"), Some(&TirValue::Text("kg".into())));
+    assert_eq!(p.other_value("MODEL", "TYRESIDE"), Some(&TirValue::Text("RIGHT".into())));
     assert!(CoefGroup::PureFy.keys().contains(&"PKY1"));
     assert!(CoefGroup::Scaling.keys().contains(&"LMUY"));
     assert_eq!(CoefGroup::of_key("RVY6"), Some(CoefGroup::Combined));
@@ -125,11 +109,7 @@ fn crlf_and_lf_read_the_same() {
 
 #[test]
 fn missing_key_is_reported_by_name() {
-    let text: String = sample_text()
-        .lines()
-        .filter(|l| !l.starts_with("PKY4 "))
-        .map(|l| format!("{l}\n"))
-        .collect();
+    let text: String = sample_text().lines().filter(|l| !l.starts_with("PKY4 ")).map(|l| format!("{l}\n")).collect();
     let err = read(&text).expect_err("PKY4 removed");
     match &err {
         TirError::MissingKey { key, section, file } => {
@@ -145,11 +125,7 @@ fn missing_key_is_reported_by_name() {
 #[test]
 fn malformed_value_is_reported_by_line_and_key() {
     let text = sample_text().replace("= 27.42326", "= 27.4x2326");
-    let line = text
-        .lines()
-        .position(|l| l.starts_with("PKY1 "))
-        .expect("PKY1 line")
-        + 1;
+    let line = text.lines().position(|l| l.starts_with("PKY1 ")).expect("PKY1 line") + 1;
     let err = read(&text).expect_err("bad number");
     match &err {
         TirError::MalformedValue { line: l, key, text, .. } => {
@@ -182,11 +158,7 @@ fn unsupported_fittyp_is_rejected_clearly() {
 
 #[test]
 fn missing_fittyp_is_reported() {
-    let text: String = sample_text()
-        .lines()
-        .filter(|l| !l.starts_with("FITTYP"))
-        .map(|l| format!("{l}\n"))
-        .collect();
+    let text: String = sample_text().lines().filter(|l| !l.starts_with("FITTYP")).map(|l| format!("{l}\n")).collect();
     assert!(matches!(read(&text), Err(TirError::MissingFittyp { .. })));
 }
 
@@ -223,15 +195,14 @@ fn shape_table_and_unknown_sections_are_kept() {
 #[test]
 fn comments_quotes_and_spacing_are_tolerated() {
     let text = sample_text()
-        .replace("PKY2                      \t = 3.660821        \t $Load at which Kfy reaches maximum value",
-                 "  pky2=3.660821$no spaces, lower case")
+        .replace(
+            "PKY2                      \t = 3.660821        \t $Load at which Kfy reaches maximum value",
+            "  pky2=3.660821$no spaces, lower case",
+        )
         .replace("TYRESIDE                  \t = 'RIGHT'", "TYRESIDE = 'RIGHT $ not a comment'");
     let p = read(&format!("! leading comment\n{text}")).expect("tolerant");
     assert_eq!(p.get("PKY2"), Some(3.660821));
-    assert_eq!(
-        p.other_value("MODEL", "TYRESIDE"),
-        Some(&TirValue::Text("RIGHT $ not a comment".into()))
-    );
+    assert_eq!(p.other_value("MODEL", "TYRESIDE"), Some(&TirValue::Text("RIGHT $ not a comment".into())));
 }
 
 #[test]

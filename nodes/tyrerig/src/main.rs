@@ -7,6 +7,7 @@
 use clap::{Parser, Subcommand};
 
 // --- subcommand modules (one per capability) ---
+mod cmd_model;
 
 #[derive(Debug, Parser)]
 #[command(name = "tyrerig", version, about = "Tyre test rig suite: GS2MF procedures, MF-Tyre 6.1 models, ROS 2 nodes")]
@@ -18,11 +19,15 @@ struct Cli {
 #[derive(Debug, Subcommand)]
 enum Command {
     // --- subcommand variants ---
+    /// MF-Tyre 6.1 model: evaluate and plot
+    #[command(subcommand)]
+    Model(cmd_model::ModelCmd),
 }
 
 fn main() -> anyhow::Result<()> {
     let cli = Cli::parse();
     match cli.command {
         // --- subcommand dispatch ---
+        Command::Model(cmd) => cmd_model::run(cmd),
     }
 }

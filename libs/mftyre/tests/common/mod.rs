@@ -33,24 +33,15 @@ pub struct Table {
 
 impl Table {
     pub fn col(&self, name: &str) -> usize {
-        self.header
-            .iter()
-            .position(|h| h == name)
-            .unwrap_or_else(|| panic!("no column {name}"))
+        self.header.iter().position(|h| h == name).unwrap_or_else(|| panic!("no column {name}"))
     }
 }
 
 pub fn read_table(name: &str) -> Table {
     let path = fixtures().join(name);
-    let text = std::fs::read_to_string(&path)
-        .unwrap_or_else(|e| panic!("{}: {e}", path.display()));
+    let text = std::fs::read_to_string(&path).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
     let mut lines = text.lines();
-    let header = lines
-        .next()
-        .expect("header")
-        .split(',')
-        .map(|s| s.trim().to_owned())
-        .collect();
+    let header = lines.next().expect("header").split(',').map(|s| s.trim().to_owned()).collect();
     let rows = lines
         .filter(|l| !l.trim().is_empty())
         .map(|l| {
@@ -72,16 +63,8 @@ pub fn read_table(name: &str) -> Table {
 
 pub fn inputs_of(t: &Table) -> Vec<MfInput> {
     let c = |n| t.col(n);
-    let (fz, k, a, g, ph, vx, p, w) = (
-        c("Fz"),
-        c("kappa"),
-        c("alpha"),
-        c("gamma"),
-        c("phit"),
-        c("Vx"),
-        c("P"),
-        c("omega"),
-    );
+    let (fz, k, a, g, ph, vx, p, w) =
+        (c("Fz"), c("kappa"), c("alpha"), c("gamma"), c("phit"), c("Vx"), c("P"), c("omega"));
     t.rows
         .iter()
         .map(|r| MfInput {
