@@ -277,6 +277,21 @@ pub struct StepSpec {
 const COMMON_KEYS: &[&str] = &["kind", "label", "mode", "pressure", "pressures", "thermal_pause"];
 
 impl StepKindSpec {
+    /// The name as written in files.
+    pub fn name(self) -> &'static str {
+        match self {
+            Self::Sweep => "sweep",
+            Self::VerticalLoad => "vertical_load",
+            Self::OnCentre => "on_centre",
+            Self::RollingRadius => "rolling_radius",
+            Self::StepSteer => "step_steer",
+            Self::StaticLong => "static_long",
+            Self::WarmUp => "warm_up",
+            Self::GraphSweeps => "graph_sweeps",
+            Self::Hold => "hold",
+        }
+    }
+
     /// Keys this kind accepts besides [`COMMON_KEYS`].
     pub fn allowed_keys(self) -> &'static [&'static str] {
         match self {
