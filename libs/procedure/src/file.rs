@@ -685,6 +685,15 @@ fn validate_step(
             }
         }
     }
+    for (key, empty) in [
+        ("cambers_deg", st.cambers_deg.as_ref().is_some_and(Vec::is_empty)),
+        ("slip_angles_deg", st.slip_angles_deg.as_ref().is_some_and(Vec::is_empty)),
+        ("pressures", st.pressures.as_ref().is_some_and(Vec::is_empty)),
+    ] {
+        if empty {
+            return Err(invalid(span, key, "expected a non-empty list".into()));
+        }
+    }
     for (key, a, b) in [
         ("loads", st.load.is_some(), st.loads.is_some()),
         ("cambers_deg", st.camber_deg.is_some(), st.cambers_deg.is_some()),

@@ -124,6 +124,7 @@ pub struct PlanSummary {
 /// time-out (§4.4: 1,600 s for 12 sweeps); BrkDrv 10/60 %/s to ±25 % ≈ 9 s, constant 10 %/s
 /// ≈ 16 s (§3.6).
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
 pub struct PauseModel {
     /// Floor of every pause [s].
     pub base_s: f64,
@@ -215,14 +216,30 @@ impl Plan {
     }
 
     /// Check every step against the rig envelope.
+    /// Check every step against the rig envelope: every setpoint inside it, and no slip moving
+    /// faster than the rig can slew.
     pub fn check_envelope(&self, limits: &RigLimits) -> Result<(), PlanEnvelopeError> {
         for st in &self.steps {
+            let err = |violation| PlanEnvelopeError { index: st.index, name: st.name.clone(), violation };
             for sp in st.trajectory.check_points() {
-                limits.check(&sp).map_err(|violation| PlanEnvelopeError {
-                    index: st.index,
-                    name: st.name.clone(),
-                    violation,
-                })?;
+                limits.check(&sp).map_err(err)?;
+            }
+            let (sa_rate, sr_rate) = st.trajectory.max_slip_rates();
+            // A little slack: keyframe times are sums of divisions.
+            let slack = 1.0 + 1e-9;
+            if sa_rate > limits.max_slip_angle_rate_dps * slack {
+                return Err(err(EnvelopeViolation {
+                    axis: "slip_angle_rate_dps",
+                    value: sa_rate,
+                    limit: limits.max_slip_angle_rate_dps,
+                }));
+            }
+            if sr_rate > limits.max_slip_ratio_rate_ps * slack {
+                return Err(err(EnvelopeViolation {
+                    axis: "slip_ratio_rate_ps",
+                    value: sr_rate,
+                    limit: limits.max_slip_ratio_rate_ps,
+                }));
             }
         }
         Ok(())

@@ -490,6 +490,32 @@ impl Trajectory {
         }
     }
 
+    /// Fastest slip-angle [deg/s] and slip-ratio [1/s] rates the trajectory asks for.
+    pub fn max_slip_rates(&self) -> (f64, f64) {
+        match self {
+            Self::Sweep(s) => {
+                let r = if s.path.duration_s() > 0.0 { s.path.law.max_rate() } else { 0.0 };
+                match s.axis {
+                    SlipAxis::SlipAngle => (r, 0.0),
+                    SlipAxis::SlipRatio => (0.0, r),
+                }
+            }
+            Self::Keyframes(k) => k.frames().windows(2).fold((0.0, 0.0), |(a, r), w| {
+                let dt = w[1].t_s - w[0].t_s;
+                let da = (w[1].sp.slip_angle_deg - w[0].sp.slip_angle_deg).abs();
+                let dr = (w[1].sp.slip_ratio - w[0].sp.slip_ratio).abs();
+                if dt > 0.0 {
+                    (f64::max(a, da / dt), f64::max(r, dr / dt))
+                } else if da > 0.0 || dr > 0.0 {
+                    // A jump in slip: an infinite rate.
+                    (if da > 0.0 { f64::INFINITY } else { a }, if dr > 0.0 { f64::INFINITY } else { r })
+                } else {
+                    (a, r)
+                }
+            }),
+        }
+    }
+
     /// Every setpoint the envelope check must see: keyframe vertices (the envelope is a box, so
     /// straight lines between vertices inside it stay inside), or a sweep sampled at its
     /// waypoints and densely between them.

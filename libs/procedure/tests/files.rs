@@ -211,6 +211,11 @@ fn envelope_refuses_a_plan() {
     inputs.limits.max_fz_n = 10_000.0;
     let e = expand(&doc, &inputs).unwrap_err();
     assert!(e.to_string().contains("fz_n"), "{e}");
+    // A rig slower than the file's 30 °/s high rate.
+    let mut inputs = RunInputs::default();
+    inputs.limits.max_slip_angle_rate_dps = 20.0;
+    let e = expand(&doc, &inputs).unwrap_err();
+    assert!(e.to_string().contains("slip_angle_rate_dps"), "{e}");
     let e = expand(&doc, &RunInputs { load_index: 20, ..RunInputs::default() }).unwrap_err();
     assert!(e.to_string().contains("load index 20"), "{e}");
 }

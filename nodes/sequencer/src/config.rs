@@ -1,6 +1,6 @@
 //! The sequencer's typed configuration (TOML, `deny_unknown_fields`, [`SequencerConfig::validate`]).
 
-use procedure::RigLimits;
+use procedure::{PauseModel, RigLimits};
 use serde::{Deserialize, Serialize};
 
 /// Sequencer configuration.
@@ -16,8 +16,9 @@ pub struct SequencerConfig {
     /// A release must be judged at least this long after the pause began [s]: a gate still
     /// open from before the sweep has not seen the sweep's heat yet.
     pub min_thermal_pause_s: f64,
-    /// Pause length assumed for the ETA until pauses have been observed [s].
-    pub default_pause_estimate_s: f64,
+    /// Cool-down model behind the ETA: each remaining pause is estimated from its sweep's slip
+    /// exposure, scaled by how the observed pauses compared with the model so far.
+    pub pause_model: PauseModel,
     /// The rig envelope: setpoints outside it are refused. Its profile limits also shape the
     /// ramps the sequencer builds itself (pause, resume).
     pub envelope: RigLimits,
@@ -30,7 +31,7 @@ impl Default for SequencerConfig {
             state_period_s: 0.5,
             thermal_stale_after_s: 2.0,
             min_thermal_pause_s: 1.0,
-            default_pause_estimate_s: 30.0,
+            pause_model: PauseModel::default(),
             envelope: RigLimits::default(),
         }
     }
@@ -66,9 +67,13 @@ impl SequencerConfig {
                 return Err(ConfigError { key, message: format!("expected a positive number, got {v}") });
             }
         }
+        let m = &self.pause_model;
         for (key, v) in [
             ("min_thermal_pause_s", self.min_thermal_pause_s),
-            ("default_pause_estimate_s", self.default_pause_estimate_s),
+            ("pause_model.base_s", m.base_s),
+            ("pause_model.per_slip_s", m.per_slip_s),
+            ("pause_model.deg_per_slip_ratio", m.deg_per_slip_ratio),
+            ("pause_model.timeout_s", m.timeout_s),
         ] {
             if !(v.is_finite() && v >= 0.0) {
                 return Err(ConfigError { key, message: format!("expected a number ≥ 0, got {v}") });

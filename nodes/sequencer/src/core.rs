@@ -251,8 +251,11 @@ pub struct Sequencer {
     frozen_elapsed_s: Option<f64>,
     started_hot: bool,
     next_started_hot: bool,
+    /// Observed pause time, and the model's estimate for the same pauses [s].
     pause_sum_s: f64,
-    pause_count: u32,
+    pause_model_sum_s: f64,
+    /// The model's pause estimate after each step [s].
+    pause_estimates_s: Vec<f64>,
     predicted_wait_s: Option<f64>,
     last_state_s: Option<f64>,
     last_state_key: Option<(u8, usize)>,
@@ -301,6 +304,7 @@ impl Sequencer {
             return Err(SequencerError::EmptyPlan);
         }
         plan.check_envelope(&cfg.envelope)?;
+        let pause_estimates_s = plan.steps.iter().map(|s| cfg.pause_model.pause_after_s(s)).collect();
         Ok(Self {
             plan,
             cfg,
@@ -318,7 +322,8 @@ impl Sequencer {
             started_hot: false,
             next_started_hot: false,
             pause_sum_s: 0.0,
-            pause_count: 0,
+            pause_model_sum_s: 0.0,
+            pause_estimates_s,
             predicted_wait_s: None,
             last_state_s: None,
             last_state_key: None,
@@ -579,7 +584,7 @@ impl Sequencer {
 
     fn enter_step(&mut self, t0: f64, out: &mut SequencerOutput) {
         let step = &self.plan.steps[self.cursor];
-        let section = self.plan.sections[step.section_index].name.clone();
+        let section = self.section_name(step.section_index);
         out.events.push(SequencerEvent::StepStarted {
             index: step.index,
             name: step.name.clone(),
@@ -667,7 +672,7 @@ impl Sequencer {
                         out.events.push(SequencerEvent::SweepEnded {
                             name: name.clone(),
                             sweep_index,
-                            section: self.plan.sections[step.section_index].name.clone(),
+                            section: self.section_name(step.section_index),
                             duration_s: d,
                         });
                     }
@@ -689,7 +694,7 @@ impl Sequencer {
                     };
                     let duration_s = now_s - t0;
                     self.pause_sum_s += duration_s;
-                    self.pause_count += 1;
+                    self.pause_model_sum_s += self.pause_estimates_s[self.cursor];
                     self.next_started_hot = timed_out;
                     out.events.push(SequencerEvent::ThermalPauseEnded {
                         after_sweep: self.plan.steps[self.cursor].name.clone(),
@@ -765,6 +770,10 @@ impl Sequencer {
         }
     }
 
+    fn section_name(&self, i: usize) -> String {
+        self.plan.sections.get(i).map(|s| s.name.clone()).unwrap_or_default()
+    }
+
     fn phase(&self) -> u8 {
         match &self.state {
             State::Idle => ProcedureState::PHASE_IDLE,
@@ -813,24 +822,22 @@ impl Sequencer {
         };
         let in_pause = matches!(self.state, State::Running(Run::ThermalPause { .. }));
         let first_left = if in_pause { c + 1 } else { c };
-        let mean_pause = if self.pause_count > 0 {
-            self.pause_sum_s / f64::from(self.pause_count)
-        } else {
-            self.cfg.default_pause_estimate_s
-        };
-        let pauses_left = steps.iter().skip(first_left).filter(|s| s.thermal_pause_after).count() as f64;
-        let current_pause = if in_pause { self.predicted_wait_s.unwrap_or(mean_pause) } else { 0.0 };
+        // The model's pauses, scaled by how the pauses so far compared with it (this tyre, rig).
+        let scale = if self.pause_model_sum_s > 0.0 { self.pause_sum_s / self.pause_model_sum_s } else { 1.0 };
+        let pauses_left: f64 = self.pause_estimates_s.iter().skip(first_left).sum::<f64>() * scale;
+        let current_pause =
+            if in_pause { self.predicted_wait_s.unwrap_or(self.pause_estimates_s[c] * scale) } else { 0.0 };
         let remaining = if self.state == State::Complete {
             0.0
         } else {
-            (total - done_s - in_step_s).max(0.0) + pauses_left * mean_pause + current_pause
+            (total - done_s - in_step_s).max(0.0) + pauses_left + current_pause
         };
         let shown = self.display_step().map(|i| &steps[i]);
         ProcedureState {
             header: Header::iso_w(now_s),
             phase: self.phase(),
             procedure: step.procedure.clone(),
-            section: self.plan.sections[step.section_index].name.clone(),
+            section: self.section_name(step.section_index),
             section_index: step.section_index as u32,
             sweep_name: shown.map(|s| s.name.clone()).unwrap_or_default(),
             sweep_index: shown.and_then(|s| s.sweep_index).unwrap_or(0),

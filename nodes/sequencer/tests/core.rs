@@ -562,6 +562,7 @@ fn full_run(file: &str, model: &PauseModel, sweeps: SweepStyle) -> f64 {
     let (mut t, dt) = (0.0, 0.1);
     let mut pause: Option<(f64, f64)> = None;
     let mut sweep_step = 0usize;
+    let mut predicted_total = None;
     loop {
         t += dt;
         let th = ThermalState {
@@ -582,7 +583,16 @@ fn full_run(file: &str, model: &PauseModel, sweeps: SweepStyle) -> f64 {
             assert!(sp.fz_n.is_finite());
             assert!(sp.mode == RigSetpoint::MODE_SAFE || sp.fz_n > 0.0);
         }
+        if let Some(st) = &o.state
+            && predicted_total.is_none()
+            && t >= 1000.0
+        {
+            predicted_total = Some(st.elapsed_rig_time_s + st.estimated_remaining_s);
+        }
         if completed(&o) {
+            // With the gate following the model, the ETA after 1,000 s is close to the truth.
+            let p = predicted_total.unwrap();
+            assert!((p - t).abs() / t < 0.02, "{file}: predicted {p} s, took {t} s");
             return t;
         }
         assert!(t < 200_000.0, "never completed");
