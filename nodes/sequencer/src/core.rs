@@ -175,6 +175,13 @@ pub enum SequencerEvent {
     },
     /// Progress advanced: write [`Sequencer::checkpoint`] now.
     CheckpointChanged,
+    /// The rig reports it refused a setpoint (`RigSample.FAULT_ENVELOPE`, rising edge): its
+    /// envelope is tighter than the sequencer's configured one. The run goes on; the data of
+    /// the present step are suspect.
+    RigRefusedSetpoint {
+        /// Step running when the rig reported it.
+        step: usize,
+    },
 }
 
 /// What one call produced.
@@ -262,6 +269,8 @@ pub struct Sequencer {
     resumed: bool,
     /// Rig time of the latest call (checkpoints are taken between calls).
     last_now_s: f64,
+    /// The last sample carried FAULT_ENVELOPE (events fire on the rising edge).
+    rig_envelope_fault: bool,
 }
 
 fn phase_of_kind(kind: StepKind) -> u8 {
@@ -329,6 +338,7 @@ impl Sequencer {
             last_state_key: None,
             resumed: false,
             last_now_s: 0.0,
+            rig_envelope_fault: false,
         })
     }
 
@@ -618,6 +628,26 @@ impl Sequencer {
         out.events.push(SequencerEvent::CheckpointChanged);
     }
 
+    /// React to the rig's fault flags: a hardware e-stop is an ESTOP; a refused setpoint is
+    /// reported.
+    fn rig_faults(&mut self, now_s: f64, s: &RigSample, out: &mut SequencerOutput) {
+        let running = matches!(self.state, State::Running(_) | State::Paused { .. });
+        if s.fault_flags & RigSample::FAULT_ESTOP != 0 && running {
+            if let State::Running(run) | State::Paused { was: run, .. } = &self.state {
+                let (at, pause) = self.restart_point(&run.clone());
+                self.stop(now_s, at, pause);
+            }
+            self.state = State::EStop;
+            out.events.push(SequencerEvent::EStop);
+            out.events.push(SequencerEvent::CheckpointChanged);
+        }
+        let envelope_fault = s.fault_flags & RigSample::FAULT_ENVELOPE != 0;
+        if envelope_fault && !self.rig_envelope_fault && running {
+            out.events.push(SequencerEvent::RigRefusedSetpoint { step: self.cursor });
+        }
+        self.rig_envelope_fault = envelope_fault;
+    }
+
     fn thermal_releases(&self, now_s: f64, pause_t0: f64, th: Option<&ThermalState>) -> Option<bool> {
         let th = th?;
         let stamp = th.header.stamp.as_secs_f64();
@@ -634,6 +664,7 @@ impl Sequencer {
         self.last_now_s = now_s;
         if let Some(s) = sample {
             self.last_sample = Some(sample_setpoint(s));
+            self.rig_faults(now_s, s, &mut out);
         }
         if let Some(th) = thermal
             && now_s - th.header.stamp.as_secs_f64() <= self.cfg.thermal_stale_after_s

@@ -618,3 +618,35 @@ fn idle_sequencer_streams_nothing() {
     assert_eq!(o.state.unwrap().phase, ProcedureState::PHASE_IDLE);
     let _ = RigMode::Safe;
 }
+
+#[test]
+fn rig_faults_estop_and_refused_setpoint() {
+    let mut s = Sequencer::new(mini_plan(), SequencerConfig::default()).unwrap();
+    s.on_command(0.0, &cmd(ProcedureCommand::START)).unwrap();
+    let ok = RigSample { fzw_n: 5000.0, inflpres_pa: 2.6e5, trajvelw_mps: 16.6, ..RigSample::default() };
+    for i in 1..100 {
+        s.step(f64::from(i) * 0.01, None, Some(&ok));
+    }
+    let refused = RigSample { fault_flags: RigSample::FAULT_ENVELOPE, ..ok.clone() };
+    let o = s.step(1.0, None, Some(&refused));
+    assert!(o.events.iter().any(|e| matches!(e, SequencerEvent::RigRefusedSetpoint { .. })));
+    let o = s.step(1.01, None, Some(&refused));
+    assert!(!o.events.iter().any(|e| matches!(e, SequencerEvent::RigRefusedSetpoint { .. })), "rising edge only");
+    assert_ne!(o.setpoint.unwrap().mode, RigSetpoint::MODE_SAFE, "the run goes on");
+    let estop = RigSample { fault_flags: RigSample::FAULT_ESTOP, ..ok };
+    let o = s.step(1.02, None, Some(&estop));
+    assert!(o.events.contains(&SequencerEvent::EStop));
+    assert_eq!(o.setpoint.unwrap().mode, RigSetpoint::MODE_SAFE);
+    assert_eq!(o.state.unwrap().phase, ProcedureState::PHASE_ESTOP);
+}
+
+#[test]
+fn deterministic_outputs() {
+    let run = || {
+        let mut h = Harness::new(Sequencer::new(mini_plan(), SequencerConfig::default()).unwrap(), 2.5);
+        h.command(ProcedureCommand::START).unwrap();
+        h.run_until(1000.0, completed);
+        h.log
+    };
+    assert_eq!(run(), run());
+}
