@@ -1,6 +1,6 @@
 //! The log writer, reader and recovery on real files (no DDS).
 
-use recorder::{
+use mcaplog::{
     LogReader, McapLog, McapLogOptions, codec,
     recover::{RecoverError, recover},
 };

@@ -1,27 +1,51 @@
-//! recorder: MCAP logs of the suite (ROS 2 profile), their recovery, reading and replay.
+//! recorder: the recorder node (every suite topic → one MCAP log) and replay (a log → its topics).
 //!
-//! - [`log_writer::McapLog`]: writes a ROS 2-profile MCAP (`ros2msg` schemas, `cdr` messages,
-//!   zstd chunks, message indexes, summary, metadata). Chunks are closed at least every
-//!   `flush_interval_s` of log time, so a killed recorder loses at most that much.
-//! - [`recover`]: turns a file cut short (recorder killed, disk full) into a valid MCAP holding
-//!   every message of every complete chunk.
-//! - [`log_reader::LogReader`]: reads a log back, typed, for replay and the offline tools.
-//! - [`shell`]: the recorder node — subscribes to every suite topic and writes the log.
-//!   Topics: all of [`node_runtime::SuiteTopic::ALL`] (subscribes).
+//! The MCAP writing, reading and recovery are in the DDS-free [`mcaplog`] crate; this crate adds
+//! the DDS side.
+//!
+//! - [`shell`]: the recorder node. Topics: subscribes to every [`node_runtime::SuiteTopic`] (or the
+//!   configured subset). `log_time` = receive time (system clock, ns since the UNIX epoch);
+//!   `publish_time` = the message's `header.stamp` (rig time).
 //! - [`replay`]: republishes a log onto the same topics with its original timing, scaled.
-//!
-//! Timestamps: an MCAP message's `log_time` is when the recorder received it (system clock, ns
-//! since the UNIX epoch); its `publish_time` is the message's own stamp (`header.stamp`, or
-//! `clock` for `/clock`), i.e. rig time.
 
-pub mod codec;
 pub mod config;
-pub mod log_reader;
-pub mod log_writer;
-pub mod recover;
 pub mod replay;
 pub mod shell;
 
 pub use config::RecorderConfig;
-pub use log_reader::{LogError, LogMessage, LogReader};
-pub use log_writer::{LogWriteError, McapLog, McapLogOptions};
+pub use mcaplog::{LogError, LogMessage, LogReader, McapLog, McapLogOptions, codec, recover};
+
+#[cfg(test)]
+mod tests {
+    use mcaplog::codec::{decode, encode, leading_stamp};
+    use node_runtime::{SuiteTopic, topics::TopicVisitor};
+    use tyre_msgs::{RosMessage, builtin_interfaces::Time};
+
+    #[test]
+    fn every_suite_topic_starts_with_its_stamp() {
+        // The recorder's publish_time relies on it: the first 8 body bytes are the stamp.
+        struct Check;
+        impl TopicVisitor for Check {
+            type Output = ();
+            fn visit<M: RosMessage + Send + Sync + 'static>(self, topic: SuiteTopic) {
+                let probe = Time { sec: 1_234_567, nanosec: 890_123_456 };
+                // Encode a default message, patch the stamp bytes, and decode: a type whose first
+                // field is not a stamp would decode to a different value or fail.
+                let default: M =
+                    decode(&encode(&default_of::<M>(), "probe").expect("encode"), "probe").expect("decode");
+                let mut bytes = encode(&default, "probe").expect("encode");
+                bytes[4..8].copy_from_slice(&probe.sec.to_le_bytes());
+                bytes[8..12].copy_from_slice(&probe.nanosec.to_le_bytes());
+                let patched: M = decode(&bytes, "probe").unwrap_or_else(|e| panic!("{topic:?}: {e}"));
+                let re = encode(&patched, "probe").expect("encode");
+                assert_eq!(leading_stamp(&re), Some(probe), "{topic:?}");
+            }
+        }
+        fn default_of<M: RosMessage>() -> M {
+            tyre_msgs::introspect::exemplar::<M>(2).expect("exemplar")
+        }
+        for t in SuiteTopic::ALL {
+            t.visit(Check);
+        }
+    }
+}

@@ -1,6 +1,6 @@
 //! Replay: a recorded log back onto the same topics, with its original timing scaled.
 
-use crate::{LogError, LogReader, codec};
+use mcaplog::{LogError, LogReader, codec};
 use node_runtime::{RosNode, RuntimeError, Shutdown, SuiteTopic, topics::TopicVisitor};
 use std::{collections::BTreeMap, time::Duration};
 use tyre_msgs::RosMessage;

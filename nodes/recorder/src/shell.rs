@@ -3,12 +3,9 @@
 //! One subscription task per topic encodes what arrives and hands it to a single writer thread
 //! (file I/O stays off the async runtime). `log_time` is taken on arrival.
 
-use crate::{
-    codec,
-    config::{RecorderConfig, RecorderConfigError},
-    log_writer::{LogWriteError, McapLog, McapLogOptions},
-};
+use crate::config::{RecorderConfig, RecorderConfigError};
 use futures::StreamExt;
+use mcaplog::{LogWriteError, McapLog, McapLogOptions, codec};
 use node_runtime::{RosNode, RuntimeError, Shutdown, SuiteTopic, topics::TopicVisitor};
 use std::{collections::BTreeMap, time::SystemTime};
 use tokio::sync::mpsc;
