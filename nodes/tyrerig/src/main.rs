@@ -8,6 +8,10 @@ use clap::{Parser, Subcommand};
 
 // --- subcommand modules (one per capability) ---
 mod cmd_model;
+mod cmd_launch;
+mod cmd_mcap;
+mod cmd_replay;
+mod launch;
 
 #[derive(Debug, Parser)]
 #[command(name = "tyrerig", version, about = "Tyre test rig suite: GS2MF procedures, MF-Tyre 6.1 models, ROS 2 nodes")]
@@ -22,12 +26,26 @@ enum Command {
     /// MF-Tyre 6.1 model: evaluate and plot
     #[command(subcommand)]
     Model(cmd_model::ModelCmd),
+    /// Start the nodes a launch file lists (in this process, or --processes)
+    Launch(cmd_launch::LaunchArgs),
+    /// Run one node of a launch file alone
+    Node(cmd_launch::NodeArgs),
+    /// Republish a recorded MCAP log onto its topics with its original timing
+    Replay(cmd_replay::ReplayArgs),
+    /// Inspect and repair MCAP logs
+    #[command(subcommand)]
+    Mcap(cmd_mcap::McapCmd),
 }
 
 fn main() -> anyhow::Result<()> {
     let cli = Cli::parse();
+    node_runtime::logging::init();
     match cli.command {
         // --- subcommand dispatch ---
         Command::Model(cmd) => cmd_model::run(cmd),
+        Command::Launch(args) => cmd_launch::run_launch(args),
+        Command::Node(args) => cmd_launch::run_single(args),
+        Command::Replay(args) => cmd_replay::run(args),
+        Command::Mcap(cmd) => cmd_mcap::run(cmd),
     }
 }
