@@ -37,9 +37,9 @@ impl std::str::FromStr for SweepStyle {
 pub struct RunInputs {
     /// ETRTO load index of the tyre (drives Fz0).
     pub load_index: u32,
-    /// The three inflation pressures (low, mid, high) [bar].
+    /// The three inflation pressures (low, mid, high) \[bar\].
     pub pressures_bar: [f64; 3],
-    /// Nominal speed [m/s] (thesis: 16.6 m/s).
+    /// Nominal speed \[m/s\] (thesis: 16.6 m/s).
     pub nominal_speed_mps: f64,
     /// Variable or continually variable sweeps.
     pub sweeps: SweepStyle,

@@ -139,10 +139,10 @@ pub struct ProcedureHeader {
     /// Count the first mount as a tyre change (suites: the thesis counts both specimens).
     #[serde(default)]
     pub count_first_mount: bool,
-    /// Rig time of a tyre change [s].
+    /// Rig time of a tyre change \[s\].
     #[serde(default = "default_tyre_change_s")]
     pub tyre_change_s: f64,
-    /// Free-rolling reference hold before each longitudinal sweep [s].
+    /// Free-rolling reference hold before each longitudinal sweep \[s\].
     #[serde(default = "default_ref_s")]
     pub free_rolling_ref_s: f64,
     /// Free text.
@@ -292,7 +292,8 @@ impl StepKindSpec {
         }
     }
 
-    /// Keys this kind accepts besides [`COMMON_KEYS`].
+    /// Keys this kind accepts besides the common ones (`kind`, `label`, `mode`, `pressure`,
+    /// `pressures`, `thermal_pause`).
     pub fn allowed_keys(self) -> &'static [&'static str] {
         match self {
             Self::Sweep => &[

@@ -10,9 +10,40 @@
 //! - [`primitives`]: the GS2MF building blocks (vertical-load sweep, on-centre holds,
 //!   rolling-radius steps, step-steer, static drag, pressure change, warm-up, graph sweeps,
 //!   settles, tyre changes, thermal-pause setpoint) and sweep naming.
-//! - [`file`]: the TOML procedure format, validated with file/line/key errors.
-//! - [`expand`]: procedure + [`RunInputs`] → [`Plan`].
+//! - [`file`](mod@file): the TOML procedure format, validated with file/line/key errors.
+//! - [`expand`](mod@expand): procedure + [`RunInputs`] → [`Plan`].
 //! - [`plan`]: the plan and its time estimates.
+//!
+//! ```
+//! use procedure::{RunInputs, StepKind, expand, parse_with, ProcedureError};
+//!
+//! let src = r#"
+//! [procedure]
+//! name = "demo"
+//! title = "Demo"
+//! config_tag = "FreeRoll"
+//!
+//! [[section]]
+//! name = "force_moment"
+//! pressures = ["low", "high"]
+//!
+//! [[section.step]]
+//! kind = "sweep"
+//! peak_deg = 16.0
+//! low_rate_dps = 2.0
+//! high_rate_dps = 30.0
+//! threshold_deg = 4.0
+//! asym = "medium"
+//! "#;
+//! let mut no_includes = |p: &str| -> Result<String, ProcedureError> { unreachable!("{p}") };
+//! let doc = parse_with("demo.toml", src, &mut no_includes)?;
+//! let plan = expand(&doc, &RunInputs::default())?; // LI 110, 2.1/2.6/3.3 bar, 16.6 m/s
+//! let sweeps: Vec<_> = plan.steps.iter().filter(|s| s.kind == StepKind::Sweep).collect();
+//! assert_eq!(sweeps[0].name, "FreeRoll_sw1_VariableRate_LR2_HR30_TH4_AsymMedium_1");
+//! assert!((sweeps[0].duration_s - 9.6).abs() < 1e-9);
+//! assert!(sweeps.iter().all(|s| s.thermal_pause_after));
+//! # Ok::<(), ProcedureError>(())
+//! ```
 
 pub mod expand;
 pub mod file;

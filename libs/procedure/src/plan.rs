@@ -51,7 +51,7 @@ pub struct PlanStep {
     pub sweep_index: Option<u32>,
     /// The setpoints.
     pub trajectory: Trajectory,
-    /// Planned duration [s] (the trajectory's; thermal pauses are not included).
+    /// Planned duration \[s\] (the trajectory's; thermal pauses are not included).
     pub duration_s: f64,
     /// Whether the sequencer waits on the thermal gate after this step.
     pub thermal_pause_after: bool,
@@ -78,7 +78,7 @@ pub struct Plan {
     pub procedure: String,
     /// Human title.
     pub title: String,
-    /// Nominal load Fz0 the loads were computed from [N].
+    /// Nominal load Fz0 the loads were computed from \[N\].
     pub fz0_n: f64,
     /// Sections in order.
     pub sections: Vec<SectionInfo>,
@@ -101,9 +101,9 @@ pub struct PlanEnvelopeError {
 /// Planned rig time by category.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize, Default)]
 pub struct PlanSummary {
-    /// Sum of all step durations (no thermal pauses) [s].
+    /// Sum of all step durations (no thermal pauses) \[s\].
     pub setpoint_time_s: f64,
-    /// Time by kind [s].
+    /// Time by kind \[s\].
     pub time_by_kind_s: BTreeMap<String, f64>,
     /// Data steps.
     pub data_steps: usize,
@@ -126,13 +126,13 @@ pub struct PlanSummary {
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields, default)]
 pub struct PauseModel {
-    /// Floor of every pause [s].
+    /// Floor of every pause \[s\].
     pub base_s: f64,
     /// Seconds of cooling per deg·s of slip exposure.
     pub per_slip_s: f64,
     /// Slip-ratio → degree equivalence for the exposure integral.
     pub deg_per_slip_ratio: f64,
-    /// The thermal gate's time-out [s] (thesis: 120 s).
+    /// The thermal gate's time-out \[s\] (thesis: 120 s).
     pub timeout_s: f64,
 }
 
@@ -143,7 +143,7 @@ impl Default for PauseModel {
 }
 
 impl PauseModel {
-    /// Estimated thermal pause after `step` (0 if none follows) [s].
+    /// Estimated thermal pause after `step` (0 if none follows) \[s\].
     pub fn pause_after_s(&self, step: &PlanStep) -> f64 {
         if !step.thermal_pause_after {
             return 0.0;
@@ -180,12 +180,12 @@ impl PauseModel {
 }
 
 impl Plan {
-    /// Total planned setpoint time (no thermal pauses) [s].
+    /// Total planned setpoint time (no thermal pauses) \[s\].
     pub fn planned_duration_s(&self) -> f64 {
         self.steps.iter().map(|s| s.duration_s).sum()
     }
 
-    /// Planned time from the start of step `from` to the end [s].
+    /// Planned time from the start of step `from` to the end \[s\].
     pub fn remaining_from_s(&self, from: usize) -> f64 {
         self.steps.iter().skip(from).map(|s| s.duration_s).sum()
     }
@@ -210,7 +210,7 @@ impl Plan {
         s
     }
 
-    /// Planned time plus thermal pauses estimated by `model` [s].
+    /// Planned time plus thermal pauses estimated by `model` \[s\].
     pub fn estimate_total_s(&self, model: &PauseModel) -> f64 {
         self.steps.iter().map(|s| s.duration_s + model.pause_after_s(s)).sum()
     }

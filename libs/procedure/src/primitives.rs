@@ -21,7 +21,7 @@ pub struct Segment {
 }
 
 impl Segment {
-    /// Duration [s].
+    /// Duration \[s\].
     pub fn duration_s(&self) -> f64 {
         self.trajectory.duration_s()
     }
@@ -161,13 +161,13 @@ pub fn rolling_radius_steps(
 /// Parameters of a step-steer test.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 pub struct StepSteerParams {
-    /// Rolling speed before the stop and during the measurement [m/s] (thesis: 1 m/s).
+    /// Rolling speed before the stop and during the measurement \[m/s\] (thesis: 1 m/s).
     pub roll_speed_mps: f64,
-    /// Rolling at zero slip before the stop [s].
+    /// Rolling at zero slip before the stop \[s\].
     pub pre_roll_s: f64,
-    /// Distance rolled with the slip angle held [m].
+    /// Distance rolled with the slip angle held \[m\].
     pub distance_m: f64,
-    /// Steering rate at standstill [deg/s].
+    /// Steering rate at standstill \[deg/s\].
     pub steer_rate_dps: f64,
 }
 
@@ -203,13 +203,13 @@ pub fn step_steer(slip_angle_deg: f64, fz_n: f64, p: &StepSteerParams, base: Set
 /// Parameters of a static longitudinal drag.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 pub struct StaticDragParams {
-    /// Belt displacement with the wheel locked [m] (thesis: ~0.1 m).
+    /// Belt displacement with the wheel locked \[m\] (thesis: ~0.1 m).
     pub displacement_m: f64,
-    /// Belt speed during the drag [m/s].
+    /// Belt speed during the drag \[m/s\].
     pub belt_speed_mps: f64,
-    /// Rolling speed for the relaxing roll before the lock [m/s].
+    /// Rolling speed for the relaxing roll before the lock \[m/s\].
     pub roll_speed_mps: f64,
-    /// Relaxing roll before the lock [s].
+    /// Relaxing roll before the lock \[s\].
     pub roll_s: f64,
 }
 
@@ -330,11 +330,11 @@ pub fn thermal_pause_setpoint(end: &Setpoint) -> Setpoint {
 pub struct WarmUpParams {
     /// Number of blocks (thesis: two; one reaches only 31 °C).
     pub blocks: u32,
-    /// Peak slip angle [deg].
+    /// Peak slip angle \[deg\].
     pub peak_deg: f64,
-    /// Slip-angle rate [deg/s].
+    /// Slip-angle rate \[deg/s\].
     pub rate_dps: f64,
-    /// Rolling at zero slip after each sweep [s].
+    /// Rolling at zero slip after each sweep \[s\].
     pub roll_s: f64,
 }
 
@@ -386,7 +386,7 @@ pub enum GraphBlock {
 
 /// FreeRolling graph sweep law: the thesis's optimum variable rate, 2/30 °/s, threshold 4°.
 pub const GRAPH_FREE_ROLLING_LAW: RateLaw = RateLaw::Variable { low_rate: 2.0, high_rate: 30.0, threshold: 4.0 };
-/// FreeRolling graph sweep peak [deg] (chosen: the F&M sweeps' 16°, the tyre's usual range).
+/// FreeRolling graph sweep peak \[deg\] (chosen: the F&M sweeps' 16°, the tyre's usual range).
 pub const GRAPH_FREE_ROLLING_PEAK_DEG: f64 = 16.0;
 /// BrkDrv graph sweep law: 10/60 %/s, threshold 2 %.
 pub const GRAPH_BRKDRV_LAW: RateLaw = RateLaw::Variable { low_rate: 0.10, high_rate: 0.60, threshold: 0.02 };

@@ -34,19 +34,19 @@ impl RigMode {
 pub struct Setpoint {
     /// Rig mode.
     pub mode: RigMode,
-    /// Slip angle [deg].
+    /// Slip angle \[deg\].
     pub slip_angle_deg: f64,
-    /// Slip ratio [-] (coupled mode).
+    /// Slip ratio \[-\] (coupled mode).
     pub slip_ratio: f64,
-    /// Vertical load [N].
+    /// Vertical load \[N\].
     pub fz_n: f64,
-    /// Camber (inclination) [deg].
+    /// Camber (inclination) \[deg\].
     pub camber_deg: f64,
-    /// Inflation pressure (gauge) [bar].
+    /// Inflation pressure (gauge) \[bar\].
     pub pressure_bar: f64,
-    /// Belt speed [m/s].
+    /// Belt speed \[m/s\].
     pub speed_mps: f64,
-    /// Static mode: belt displacement from the lock point [m].
+    /// Static mode: belt displacement from the lock point \[m\].
     pub belt_displacement_m: f64,
 }
 
@@ -86,37 +86,37 @@ pub const PA_PER_BAR: f64 = 1e5;
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields, default)]
 pub struct RigLimits {
-    /// Largest |slip angle| [deg].
+    /// Largest |slip angle| \[deg\].
     pub max_slip_angle_deg: f64,
-    /// Largest |slip ratio| [-].
+    /// Largest |slip ratio| \[-\].
     pub max_slip_ratio: f64,
-    /// Largest vertical load [N].
+    /// Largest vertical load \[N\].
     pub max_fz_n: f64,
-    /// Smallest vertical load while the tyre is loaded [N] (safe state may go below).
+    /// Smallest vertical load while the tyre is loaded \[N\] (safe state may go below).
     pub min_fz_n: f64,
-    /// Largest |camber| [deg].
+    /// Largest |camber| \[deg\].
     pub max_camber_deg: f64,
-    /// Largest belt speed [m/s].
+    /// Largest belt speed \[m/s\].
     pub max_speed_mps: f64,
-    /// Lowest inflation pressure [bar].
+    /// Lowest inflation pressure \[bar\].
     pub min_pressure_bar: f64,
-    /// Highest inflation pressure [bar].
+    /// Highest inflation pressure \[bar\].
     pub max_pressure_bar: f64,
-    /// Largest |belt displacement| in static mode [m].
+    /// Largest |belt displacement| in static mode \[m\].
     pub max_belt_displacement_m: f64,
-    /// Fastest slip-angle slew [deg/s] (the thesis's "fastest the rig allows": 30 °/s).
+    /// Fastest slip-angle slew \[deg/s\] (the thesis's "fastest the rig allows": 30 °/s).
     pub max_slip_angle_rate_dps: f64,
-    /// Fastest slip-ratio slew [1/s] (60 %/s: faster makes the tyre slip on the rim).
+    /// Fastest slip-ratio slew \[1/s\] (60 %/s: faster makes the tyre slip on the rim).
     pub max_slip_ratio_rate_ps: f64,
-    /// Load slew used for settles and vertical-load sweeps [N/s].
+    /// Load slew used for settles and vertical-load sweeps \[N/s\].
     pub load_rate_nps: f64,
-    /// Camber slew used for settles [deg/s].
+    /// Camber slew used for settles \[deg/s\].
     pub camber_rate_dps: f64,
-    /// Belt acceleration used for settles [m/s²].
+    /// Belt acceleration used for settles \[m/s²\].
     pub speed_accel_mps2: f64,
-    /// Time to change inflation pressure [s] (the thesis: "around 20 s").
+    /// Time to change inflation pressure \[s\] (the thesis: "around 20 s").
     pub pressure_change_s: f64,
-    /// Dwell added to every settle so the load case is steady before data [s].
+    /// Dwell added to every settle so the load case is steady before data \[s\].
     pub settle_dwell_s: f64,
 }
 

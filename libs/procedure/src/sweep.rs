@@ -10,9 +10,9 @@ use serde::{Deserialize, Serialize};
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Serialize, Deserialize)]
 #[serde(rename_all = "snake_case")]
 pub enum SlipAxis {
-    /// Slip angle [deg] (free rolling).
+    /// Slip angle \[deg\] (free rolling).
     SlipAngle,
-    /// Slip ratio [-] (coupled drive).
+    /// Slip ratio \[-\] (coupled drive).
     SlipRatio,
 }
 
@@ -22,7 +22,7 @@ pub enum SlipAxis {
 pub enum RateLaw {
     /// One rate throughout.
     Constant {
-        /// Rate [deg/s or 1/s].
+        /// Rate \[deg/s or 1/s\].
         rate: f64,
     },
     /// The thesis's "shark tooth": `low_rate` while |slip| < `threshold`, `high_rate` beyond.
@@ -201,7 +201,7 @@ impl SlipPath {
         Self::new(vec![0.0, -peak, peak, 0.0], law)
     }
 
-    /// Total time of the path [s].
+    /// Total time of the path \[s\].
     pub fn duration_s(&self) -> f64 {
         self.duration_s
     }
@@ -228,7 +228,7 @@ impl SlipPath {
         self.waypoints.iter().fold(0.0_f64, |m, w| m.max(w.abs()))
     }
 
-    /// ∫|slip| dt over the path (a wear and heat proxy used by time estimates) [unit·s].
+    /// ∫|slip| dt over the path (a wear and heat proxy used by time estimates) \[unit·s\].
     pub fn slip_time_integral(&self) -> f64 {
         let n = 400;
         let dt = self.duration_s / n as f64;
@@ -268,17 +268,17 @@ pub const ASYM_SATURATION_DEG: f64 = 5.0;
 pub enum LoadCoupling {
     /// Constant load.
     Constant {
-        /// Load [N].
+        /// Load \[N\].
         fz_n: f64,
     },
     /// Lateral weight transfer: linear in slip angle between the mean load at 0° and
     /// `neg_n` / `pos_n` at ∓`saturation_deg`, constant beyond.
     Asymmetric {
-        /// Load at slip angle ≤ −saturation [N].
+        /// Load at slip angle ≤ −saturation \[N\].
         neg_n: f64,
-        /// Load at slip angle ≥ +saturation [N].
+        /// Load at slip angle ≥ +saturation \[N\].
         pos_n: f64,
-        /// Saturation slip angle [deg].
+        /// Saturation slip angle \[deg\].
         saturation_deg: f64,
     },
 }
@@ -291,7 +291,7 @@ impl LoadCoupling {
         Self::Asymmetric { neg_n: n * fz0_n, pos_n: p * fz0_n, saturation_deg: ASYM_SATURATION_DEG }
     }
 
-    /// Load at slip angle `sa_deg` [N].
+    /// Load at slip angle `sa_deg` \[N\].
     pub fn at(&self, sa_deg: f64) -> f64 {
         match *self {
             Self::Constant { fz_n } => fz_n,
@@ -309,23 +309,23 @@ impl LoadCoupling {
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 #[serde(rename_all = "snake_case", tag = "coupling")]
 pub enum CamberCoupling {
-    /// Constant camber [deg].
+    /// Constant camber \[deg\].
     Constant {
-        /// Camber [deg].
+        /// Camber \[deg\].
         camber_deg: f64,
     },
     /// `camber = gain_deg · clamp(SA / saturation_deg, −1, 1)`: positive gain acts with the slip
     /// angle (everyday cornering), negative gain against it (adverse).
     Coupled {
-        /// Camber reached at and beyond the saturation slip angle [deg].
+        /// Camber reached at and beyond the saturation slip angle \[deg\].
         gain_deg: f64,
-        /// Slip angle where camber stops following [deg].
+        /// Slip angle where camber stops following \[deg\].
         saturation_deg: f64,
     },
 }
 
 impl CamberCoupling {
-    /// Camber at slip angle `sa_deg` [deg].
+    /// Camber at slip angle `sa_deg` \[deg\].
     pub fn at(&self, sa_deg: f64) -> f64 {
         match *self {
             Self::Constant { camber_deg } => camber_deg,
@@ -371,7 +371,7 @@ impl SlipSweep {
 /// is this frame's until the next one.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 pub struct Keyframe {
-    /// Time since the trajectory's start [s].
+    /// Time since the trajectory's start \[s\].
     pub t_s: f64,
     /// Setpoint at that time.
     pub sp: Setpoint,
@@ -394,7 +394,7 @@ impl Keyframes {
         self.frames.last().map(|k| k.sp).unwrap_or_default()
     }
 
-    /// Duration so far [s].
+    /// Duration so far \[s\].
     pub fn duration_s(&self) -> f64 {
         self.frames.last().map_or(0.0, |k| k.t_s)
     }
@@ -461,7 +461,7 @@ pub enum Trajectory {
 }
 
 impl Trajectory {
-    /// Duration [s].
+    /// Duration \[s\].
     pub fn duration_s(&self) -> f64 {
         match self {
             Self::Sweep(s) => s.path.duration_s(),
@@ -490,7 +490,7 @@ impl Trajectory {
         }
     }
 
-    /// Fastest slip-angle [deg/s] and slip-ratio [1/s] rates the trajectory asks for.
+    /// Fastest slip-angle \[deg/s\] and slip-ratio \[1/s\] rates the trajectory asks for.
     pub fn max_slip_rates(&self) -> (f64, f64) {
         match self {
             Self::Sweep(s) => {

@@ -7,13 +7,13 @@ use serde::{Deserialize, Serialize};
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields, default)]
 pub struct SequencerConfig {
-    /// Rate the shell calls `step` at and streams setpoints [Hz].
+    /// Rate the shell calls `step` at and streams setpoints \[Hz\].
     pub control_rate_hz: f64,
-    /// `ProcedureState` is published on change and at least this often [s] (2 Hz).
+    /// `ProcedureState` is published on change and at least this often \[s\] (2 Hz).
     pub state_period_s: f64,
-    /// A `ThermalState` older than this (by its stamp, in rig time) cannot release a pause [s].
+    /// A `ThermalState` older than this (by its stamp, in rig time) cannot release a pause \[s\].
     pub thermal_stale_after_s: f64,
-    /// A release must be judged at least this long after the pause began [s]: a gate still
+    /// A release must be judged at least this long after the pause began \[s\]: a gate still
     /// open from before the sweep has not seen the sweep's heat yet.
     pub min_thermal_pause_s: f64,
     /// Cool-down model behind the ETA: each remaining pause is estimated from its sweep's slip

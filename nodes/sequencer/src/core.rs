@@ -119,7 +119,7 @@ pub enum SequencerEvent {
         sweep_index: u32,
         /// Section.
         section: String,
-        /// Its duration [s].
+        /// Its duration \[s\].
         duration_s: f64,
     },
     /// A thermal pause began after `after_sweep`.
@@ -131,7 +131,7 @@ pub enum SequencerEvent {
     ThermalPauseEnded {
         /// The sweep before the pause.
         after_sweep: String,
-        /// Pause length [s].
+        /// Pause length \[s\].
         duration_s: f64,
         /// Released by the gate's time-out (the next sweep starts hot).
         timed_out: bool,
@@ -140,7 +140,7 @@ pub enum SequencerEvent {
     TyreChange {
         /// Specimen being mounted.
         specimen: String,
-        /// Planned rig time [s].
+        /// Planned rig time \[s\].
         duration_s: f64,
     },
     /// PAUSE obeyed.
@@ -159,7 +159,7 @@ pub enum SequencerEvent {
     EStop,
     /// Every step done.
     Completed {
-        /// Rig time of the whole run [s].
+        /// Rig time of the whole run \[s\].
         elapsed_rig_time_s: f64,
     },
     /// A setpoint outside the envelope was not sent; the run was aborted.
@@ -208,7 +208,7 @@ pub struct Checkpoint {
     pub thermal_pause_first: bool,
     /// Steps completed.
     pub completed_steps: usize,
-    /// Rig time used so far [s].
+    /// Rig time used so far \[s\].
     pub elapsed_rig_time_s: f64,
     /// The whole plan is done.
     pub complete: bool,
@@ -252,16 +252,16 @@ pub struct Sequencer {
     seq: u64,
     last_setpoint: Option<Setpoint>,
     last_sample: Option<Setpoint>,
-    /// Rig time accumulated by earlier runs [s].
+    /// Rig time accumulated by earlier runs \[s\].
     elapsed_before_s: f64,
     run_started_s: Option<f64>,
     frozen_elapsed_s: Option<f64>,
     started_hot: bool,
     next_started_hot: bool,
-    /// Observed pause time, and the model's estimate for the same pauses [s].
+    /// Observed pause time, and the model's estimate for the same pauses \[s\].
     pause_sum_s: f64,
     pause_model_sum_s: f64,
-    /// The model's pause estimate after each step [s].
+    /// The model's pause estimate after each step \[s\].
     pause_estimates_s: Vec<f64>,
     predicted_wait_s: Option<f64>,
     last_state_s: Option<f64>,
