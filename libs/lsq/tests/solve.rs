@@ -276,3 +276,38 @@ fn non_finite_trial_points_are_rejected_not_fatal() {
     assert!(report.termination.converged(), "{report:?}");
     assert!((report.params[1] - 1.5).abs() < 1e-6, "{report:?}");
 }
+
+/// A dense linear problem with 40 parameters (the MF fits' size) against nalgebra's SVD.
+struct Linear {
+    a: DMatrix<f64>,
+    b: DVector<f64>,
+}
+
+impl Problem for Linear {
+    fn num_residuals(&self) -> usize {
+        self.b.len()
+    }
+    fn residuals(&self, p: &DVector<f64>, r: &mut DVector<f64>) {
+        self.a.mul_to(p, r);
+        *r -= &self.b;
+    }
+    fn jacobian(&self, _p: &DVector<f64>, j: &mut DMatrix<f64>) -> bool {
+        j.copy_from(&self.a);
+        true
+    }
+}
+
+#[test]
+fn forty_parameters_match_a_direct_solve() {
+    let (m, n) = (2000, 40);
+    let mut g = Gauss::new(11);
+    // Columns of very different scales, as MF coefficients have.
+    let a = DMatrix::from_fn(m, n, |_, j| g.sample(1.0) * 10f64.powi((j % 7) as i32 - 3));
+    let b = DVector::from_fn(m, |_, _| g.sample(1.0));
+    let expected = a.clone().svd(true, true).solve(&b, 1e-14).unwrap();
+    let problem = Linear { a, b };
+    let report = solve(&problem, DVector::zeros(n), &Options::default()).unwrap();
+    assert!(report.termination.converged(), "{report:?}");
+    let rel = (&report.params - &expected).norm() / expected.norm();
+    assert!(rel < 1e-8, "relative difference {rel}");
+}

@@ -600,6 +600,16 @@ impl ThermalGate {
         }
     }
 
+    /// Predicted length of a pause that starts at `start_temp_c`, from the present cooling
+    /// model (the fit of a running pause, else the prior for the next one), capped at the
+    /// time-out. For the sequencer's ETA of the pauses still to come (s).
+    pub fn predict_pause_s(&self, start_temp_c: f64) -> f64 {
+        if !start_temp_c.is_finite() {
+            return self.config.timeout_s;
+        }
+        self.cooling_model().time_to_reach_s(start_temp_c, self.config.baseline_c).min(self.config.timeout_s)
+    }
+
     /// The filtered temperature against the warm-up target right now.
     pub fn warm_up_status(&self) -> WarmUpStatus {
         if self.fault.is_some() || !self.filter.ready() {

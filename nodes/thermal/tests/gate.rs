@@ -403,6 +403,11 @@ fn next_pause_is_seeded_with_the_fitted_time_constant() {
     assert_eq!(prior.tau_s, fitted.tau_s);
     assert_eq!(prior.data_s, 0.0);
     assert_eq!(rig.step().state.cooling_time_constant_s, fitted.tau_s);
+    // The sequencer's ETA for a pause after a sweep that ends at 70 °C: about 20·ln(45/20).
+    let predicted_s = rig.gate.predict_pause_s(70.0);
+    assert!((predicted_s - 16.2).abs() < 1.0, "{predicted_s}");
+    assert_eq!(rig.gate.predict_pause_s(40.0), 0.0);
+    assert_eq!(rig.gate.predict_pause_s(f64::NAN), 120.0);
 }
 
 #[test]
