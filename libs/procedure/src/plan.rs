@@ -245,8 +245,8 @@ impl Plan {
         Ok(())
     }
 
-    /// A short fingerprint of the plan (procedure, step names and durations), stored in
-    /// checkpoints so a resume against a different plan is refused.
+    /// A short fingerprint of the plan (procedure, Fz0, step names, durations, loads, pressures,
+    /// speeds), stored in checkpoints so a resume against a different plan is refused.
     pub fn fingerprint(&self) -> u64 {
         // FNV-1a: stable across builds and platforms, unlike `DefaultHasher`.
         let mut h: u64 = 0xcbf2_9ce4_8422_2325;
@@ -256,10 +256,18 @@ impl Plan {
                 h = h.wrapping_mul(0x0100_0000_01b3);
             }
         };
+        // Quantised so that harmless float noise does not change it; loads, pressures and speeds
+        // are in, so a checkpoint of another tyre (load index) or pressure set is refused.
+        let q = |x: f64, k: f64| ((x * k).round() as i64).to_le_bytes();
         eat(self.procedure.as_bytes());
+        eat(&q(self.fz0_n, 1.0));
         for s in &self.steps {
             eat(s.name.as_bytes());
-            eat(&((s.duration_s * 1000.0).round() as i64).to_le_bytes());
+            eat(&q(s.duration_s, 1000.0));
+            let sp = s.trajectory.start();
+            eat(&q(sp.fz_n, 1.0));
+            eat(&q(sp.pressure_bar, 1000.0));
+            eat(&q(sp.speed_mps, 1000.0));
         }
         h
     }

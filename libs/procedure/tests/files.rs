@@ -219,3 +219,14 @@ fn envelope_refuses_a_plan() {
     let e = expand(&doc, &RunInputs { load_index: 20, ..RunInputs::default() }).unwrap_err();
     assert!(e.to_string().contains("load index 20"), "{e}");
 }
+
+#[test]
+fn fingerprint_tracks_tyre_and_pressures() {
+    let a = plan_with("gs2mf_staticlong.toml", RunInputs::default());
+    let b = plan_with("gs2mf_staticlong.toml", RunInputs::default());
+    assert_eq!(a.fingerprint(), b.fingerprint());
+    let c = plan_with("gs2mf_staticlong.toml", RunInputs { load_index: 111, ..RunInputs::default() });
+    assert_ne!(a.fingerprint(), c.fingerprint());
+    let d = plan_with("gs2mf_staticlong.toml", RunInputs { pressures_bar: [2.0, 2.6, 3.3], ..RunInputs::default() });
+    assert_ne!(a.fingerprint(), d.fingerprint());
+}
