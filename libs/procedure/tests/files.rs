@@ -85,7 +85,7 @@ fn brkdrv_sections_and_content() {
     for s in [
         "warmup",
         "graph_sweep_1",
-        "pure_long_a_2.1bar",
+        "pure_long_a_3.3bar",
         "pure_long_b",
         "combined_a",
         "combined_b",
@@ -229,4 +229,51 @@ fn fingerprint_tracks_tyre_and_pressures() {
     assert_ne!(a.fingerprint(), c.fingerprint());
     let d = plan_with("gs2mf_staticlong.toml", RunInputs { pressures_bar: [2.0, 2.6, 3.3], ..RunInputs::default() });
     assert_ne!(a.fingerprint(), d.fingerprint());
+}
+
+#[test]
+#[ignore = "prints a plan listing: cargo test -p procedure --test files listing -- --ignored --nocapture"]
+fn listing() {
+    let file = std::env::var("PLAN").unwrap_or_else(|_| "gs2mf_brkdrv.toml".into());
+    let p = plan(&file, SweepStyle::Variable);
+    for st in &p.steps {
+        let sp = st.trajectory.start();
+        println!(
+            "{:4} {:15} {:58} {:7.2} s  fz {:7.0} N  SA {:6.2}  camber {:5.2}  p {:4.2} bar  v {:5.2}  {}{}",
+            st.index,
+            format!("{:?}", st.kind),
+            st.name,
+            st.duration_s,
+            sp.fz_n,
+            sp.slip_angle_deg,
+            sp.camber_deg,
+            sp.pressure_bar,
+            sp.speed_mps,
+            p.sections[st.section_index].name,
+            if st.thermal_pause_after { "  +pause" } else { "" }
+        );
+    }
+}
+
+#[test]
+#[ignore = "prints planned times: cargo test -p procedure --test files summaries -- --ignored --nocapture"]
+fn summaries() {
+    let m = PauseModel::default();
+    for f in
+        ["gs2mf_freerolling.toml", "gs2mf_brkdrv.toml", "gs2mf_staticlong.toml", "gs2mf.toml", "square_matrix.toml"]
+    {
+        for style in [SweepStyle::Variable, SweepStyle::Continuous] {
+            let p = plan(f, style);
+            let s = p.summary();
+            println!(
+                "{f:24} {style:?}: setpoint {:6.0} s, with pauses {:6.0} s, sweeps {}, data steps {}, pauses {}, tyre changes {}",
+                s.setpoint_time_s,
+                p.estimate_total_s(&m),
+                s.sweeps,
+                s.data_steps,
+                s.thermal_pauses,
+                s.tyre_changes
+            );
+        }
+    }
 }
