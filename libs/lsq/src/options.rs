@@ -35,11 +35,12 @@ impl Loss {
             }
             Loss::SoftL1(d) => {
                 let z = (1.0 + s / (d * d)).sqrt();
-                [2.0 * d * d * (z - 1.0), 1.0 / z]
+                // 2δ²(z − 1) rewritten as 2s/(z + 1): no cancellation for s ≪ δ².
+                [2.0 * s / (z + 1.0), 1.0 / z]
             }
             Loss::Cauchy(d) => {
-                let z = 1.0 + s / (d * d);
-                [d * d * z.ln(), 1.0 / z]
+                let x = s / (d * d);
+                [d * d * x.ln_1p(), 1.0 / (1.0 + x)]
             }
         }
     }
@@ -245,5 +246,37 @@ impl Options {
             }
         }
         Ok((lower, upper))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn loss_derivatives_match_finite_differences() {
+        for loss in [Loss::Linear, Loss::Huber(0.7), Loss::SoftL1(0.7), Loss::Cauchy(0.7)] {
+            for s in [1e-3, 0.1, 0.45, 0.55, 2.0, 50.0] {
+                let h = 1e-6 * s;
+                let numeric = (loss.evaluate(s + h)[0] - loss.evaluate(s - h)[0]) / (2.0 * h);
+                let [rho, d_rho] = loss.evaluate(s);
+                assert!((d_rho - numeric).abs() < 1e-6, "{loss:?} at {s}: {d_rho} vs {numeric}");
+                // Every loss is ≈ s near zero and grows no faster than s.
+                assert!(rho <= s * (1.0 + 1e-12) && rho > 0.0, "{loss:?} at {s}");
+            }
+            let [rho, d_rho] = loss.evaluate(1e-12);
+            assert!((rho / 1e-12 - 1.0).abs() < 1e-6 && (d_rho - 1.0).abs() < 1e-6);
+        }
+    }
+
+    #[test]
+    fn builder_sets_fields() {
+        let o = Options::default().max_iterations(7).ftol(1e-3).loss(Loss::Huber(2.0)).check_jacobian(true);
+        assert_eq!(o.max_iterations, 7);
+        assert_eq!(o.ftol, 1e-3);
+        assert_eq!(o.loss, Loss::Huber(2.0));
+        assert!(o.check_jacobian);
+        let (lo, up) = o.validate(2).unwrap();
+        assert!(lo.iter().all(|v| *v == f64::NEG_INFINITY) && up.iter().all(|v| *v == f64::INFINITY));
     }
 }

@@ -69,7 +69,6 @@ pub fn solve<P: Problem + ?Sized>(problem: &P, p0: DVector<f64>, options: &Optio
     let mut p_trial = DVector::<f64>::zeros(n);
     let mut h = DVector::<f64>::zeros(n);
     let mut step = DVector::<f64>::zeros(n);
-    let mut rs = vec![0.0; n];
     let mut grad = DVector::<f64>::zeros(n);
     let mut col_norm = DVector::<f64>::zeros(n);
     let mut d = match &options.scaling {
@@ -216,16 +215,18 @@ pub fn solve<P: Problem + ?Sized>(problem: &P, p0: DVector<f64>, options: &Optio
             // Predicted reduction of the (reweighted) Gauss–Newton model for the actual step:
             // ½‖Qᵀr‖² − ½‖Qᵀr + R·s‖² over the first n rows (the rest does not depend on s).
             let mut predicted = 0.0;
-            for (i, rs_i) in rs.iter_mut().enumerate() {
-                let mut acc = 0.0;
+            for i in 0..n {
+                let mut rs_i = 0.0;
                 for j in i..n {
-                    acc += jac[(i, j)] * step[j];
+                    rs_i += jac[(i, j)] * step[j];
                 }
-                *rs_i = acc;
-                predicted -= qtr[i] * acc + 0.5 * acc * acc;
+                predicted -= qtr[i] * rs_i + 0.5 * rs_i * rs_i;
             }
-            let step_norm = d.component_mul(&step).norm();
-            let p_norm = d.component_mul(&p).norm();
+            let (mut step_norm, mut p_norm) = (0.0_f64, 0.0_f64);
+            for j in 0..n {
+                step_norm = step_norm.hypot(d[j] * step[j]);
+                p_norm = p_norm.hypot(d[j] * p[j]);
+            }
             let small_step = step_norm <= options.xtol * (p_norm + options.xtol);
 
             if predicted > 0.0 && step_norm > 0.0 {
