@@ -9,6 +9,7 @@
 
 use std::f64::consts::{FRAC_2_PI, PI};
 
+use crate::fastmath::{Fast, sin_cos};
 use crate::params::{ScalingFactors, TyreParams};
 
 /// Small number that keeps divisions finite (4.E6a); signed like the quantity it protects.
@@ -272,7 +273,7 @@ fn cos_atan(x: f64) -> f64 {
 #[inline(always)]
 fn mf_arg(b: f64, x: f64, e: f64) -> f64 {
     let bx = b * x;
-    bx - e * (bx - bx.atan())
+    bx - e * (bx - bx.fatan())
 }
 
 /// Operating point after limit checks and low-speed handling.
@@ -338,13 +339,16 @@ fn prepare(p: &TyreParams, mode: UseMode, input: &MfInput) -> Prepared {
                 let ratio = vcx / vxlow;
                 // Shifts fade in with a cosine ramp and slip with a linear one, so forces go
                 // smoothly to zero at standstill instead of through the 0/0 of slip.
-                reduction_smooth = 1.0 - 0.5 * (1.0 + (PI * ratio).cos());
+                reduction_smooth = 1.0 - 0.5 * (1.0 + (PI * ratio).fcos());
                 kappa *= ratio.abs();
                 kappa_out *= ratio.abs();
             }
-            let speed_sum = vcx.abs() + (alpha.tan() * vcx).abs();
-            if speed_sum < vxlow {
-                alpha *= speed_sum / vxlow;
+            // The side-slip speed only matters when the forward speed is already below VXLOW.
+            if vcx.abs() < vxlow {
+                let speed_sum = vcx.abs() + (alpha.ftan() * vcx).abs();
+                if speed_sum < vxlow {
+                    alpha *= speed_sum / vxlow;
+                }
             }
         }
         let l = &p.limits;
@@ -380,6 +384,8 @@ struct Basic {
     gamma_s: f64,
     /// cos α' = Vcx/V'c (4.E6).
     cos_alpha_p: f64,
+    /// cos α*, for the residual moment's Dr (4.E47).
+    cos_alpha_s: f64,
 }
 
 #[inline(always)]
@@ -389,14 +395,20 @@ fn basic(p: &TyreParams, s: &ScalingFactors, mode: UseMode, x: &Prepared) -> Bas
     let dfz = (x.fz - fz0p) / fz0p;
     let nompres = p.operating.nompres;
     let dpi = (x.press - nompres) / nompres;
-    let tan_alpha = x.alpha.tan();
-    let (alpha_s, gamma_s) =
-        if mode.alpha_star() { (tan_alpha * sgn1(x.vcx), x.gamma.sin()) } else { (x.alpha, x.gamma) };
+    // One sin/cos pair serves tan α (for V'c and α*) and cos α* (for Dr) in the TNO mode.
+    let (sin_alpha, cos_alpha) = sin_cos(x.alpha);
+    let tan_alpha = sin_alpha / cos_alpha;
+    let (alpha_s, gamma_s, cos_alpha_s) = if mode.alpha_star() {
+        let a = tan_alpha * sgn1(x.vcx);
+        (a, x.gamma.fsin(), a.fcos())
+    } else {
+        (x.alpha, x.gamma, cos_alpha)
+    };
     let vsy = tan_alpha * x.vcx.abs();
     let vc = (x.vcx * x.vcx + vsy * vsy).sqrt();
     let vc_p = vc + EPS;
     let cos_alpha_p = (x.vcx / vc_p).clamp(-1.0, 1.0);
-    Basic { fz0, fz0p, dfz, dpi, alpha_s, gamma_s, cos_alpha_p }
+    Basic { fz0, fz0p, dfz, dpi, alpha_s, gamma_s, cos_alpha_p, cos_alpha_s }
 }
 
 /// Pure longitudinal force (4.E9–4.E18) → (Fx0, μx, Kxκ).
@@ -423,7 +435,7 @@ fn fx0(p: &TyreParams, s: &ScalingFactors, mode: UseMode, x: &Prepared, b: &Basi
     if mode.limits_check() && ex > 1.0 {
         ex = 1.0;
     }
-    let mut f = dx * (cx * mf_arg(bx, kx, ex).atan()).sin() + svx;
+    let mut f = dx * (cx * mf_arg(bx, kx, ex).fatan()).fsin() + svx;
     if x.vcx < 0.0 {
         f = -f;
     }
@@ -451,7 +463,7 @@ fn kya(p: &TyreParams, s: &ScalingFactors, b: &Basic, fz: f64, gamma_s: f64) -> 
         * b.fz0p
         * (1.0 + pr.ppy1 * b.dpi)
         * (1.0 - c.pky3 * gamma_s.abs())
-        * (c.pky4 * ((fz / b.fz0p) / ((c.pky2 + c.pky5 * gamma_s * gamma_s) * (1.0 + pr.ppy2 * b.dpi))).atan()).sin()
+        * (c.pky4 * ((fz / b.fz0p) / ((c.pky2 + c.pky5 * gamma_s * gamma_s) * (1.0 + pr.ppy2 * b.dpi))).fatan()).fsin()
         * s.lky
 }
 
@@ -488,7 +500,7 @@ fn fy0_with(
         ey = 1.0;
     }
     let by = kya / (cy * dy + EPS * sgn1(dy));
-    let mut fy0 = dy * (cy * mf_arg(by, alphay, ey).atan()).sin() + svy;
+    let mut fy0 = dy * (cy * mf_arg(by, alphay, ey).fatan()).fsin() + svy;
     if mode.alpha_star() && x.vcx < 0.0 {
         fy0 = -fy0;
     }
@@ -510,8 +522,8 @@ fn gxa(p: &TyreParams, s: &ScalingFactors, mode: UseMode, x: &Prepared, b: &Basi
     let shxa = c.rhx1;
     let bxa = (c.rbx1 + c.rbx3 * b.gamma_s * b.gamma_s) * cos_atan(c.rbx2 * x.kappa) * s.lxal;
     let alphas = b.alpha_s + shxa;
-    let g0 = (cxa * mf_arg(bxa, shxa, exa).atan()).cos();
-    (cxa * mf_arg(bxa, alphas, exa).atan()).cos() / g0
+    let g0 = (cxa * mf_arg(bxa, shxa, exa).fatan()).fcos();
+    (cxa * mf_arg(bxa, alphas, exa).fatan()).fcos() / g0
 }
 
 /// Gyκ and SVyκ (4.E58–4.E67).
@@ -520,7 +532,7 @@ fn gyk(p: &TyreParams, s: &ScalingFactors, mode: UseMode, x: &Prepared, b: &Basi
     let c = &p.combined;
     let (dfz, gs, as_) = (b.dfz, b.gamma_s, b.alpha_s);
     let dvyk = muy * x.fz * (c.rvy1 + c.rvy2 * dfz + c.rvy3 * gs) * cos_atan(c.rvy4 * as_);
-    let svyk = dvyk * (c.rvy5 * (c.rvy6 * x.kappa).atan()).sin() * s.lvyka * x.reduction_smooth;
+    let svyk = dvyk * (c.rvy5 * (c.rvy6 * x.kappa).fatan()).fsin() * s.lvyka * x.reduction_smooth;
     let shyk = c.rhy1 + c.rhy2 * dfz;
     let mut eyk = c.rey1 + c.rey2 * dfz;
     if mode.limits_check() && eyk > 1.0 {
@@ -529,8 +541,8 @@ fn gyk(p: &TyreParams, s: &ScalingFactors, mode: UseMode, x: &Prepared, b: &Basi
     let cyk = c.rcy1;
     let byk = (c.rby1 + c.rby4 * gs * gs) * cos_atan(c.rby2 * (as_ - c.rby3)) * s.lyka;
     let kappas = x.kappa + shyk;
-    let g0 = (cyk * mf_arg(byk, shyk, eyk).atan()).cos();
-    let g = (cyk * mf_arg(byk, kappas, eyk).atan()).cos() / g0;
+    let g0 = (cyk * mf_arg(byk, shyk, eyk).fatan()).fcos();
+    let g = (cyk * mf_arg(byk, kappas, eyk).fatan()).fcos() / g0;
     (g, svyk)
 }
 
@@ -554,10 +566,20 @@ fn mx(p: &TyreParams, s: &ScalingFactors, x: &Prepared, b: &Basic, fy: f64) -> f
         * (q.qsx1 * s.lvmx - q.qsx2 * g * (1.0 + p.pressure.ppmx1 * b.dpi)
             + q.qsx3 * fy_r
             + q.qsx4
-                * (q.qsx5 * ((q.qsx6 * fz_r) * (q.qsx6 * fz_r)).atan()).cos()
-                * (q.qsx7 * g + q.qsx8 * (q.qsx9 * fy_r).atan()).sin()
-            + q.qsx10 * (q.qsx11 * fz_r).atan() * g)
+                * (q.qsx5 * ((q.qsx6 * fz_r) * (q.qsx6 * fz_r)).fatan()).fcos()
+                * (q.qsx7 * g + q.qsx8 * (q.qsx9 * fy_r).fatan()).fsin()
+            + q.qsx10 * (q.qsx11 * fz_r).fatan() * g)
         + r0 * s.lmx * (fy * (q.qsx13 + q.qsx14 * g.abs()) - fz * q.qsx12 * g * g.abs())
+}
+
+/// (Fz/Fz0)^QSY7 · (p/p0)^QSY8 with one exp instead of two powf calls.
+#[inline(always)]
+fn load_pressure_factor(fz_r: f64, p_r: f64, qsy7: f64, qsy8: f64) -> f64 {
+    if fz_r > 0.0 && p_r > 0.0 {
+        (qsy7 * fz_r.ln() + qsy8 * p_r.ln()).exp()
+    } else {
+        fz_r.powf(qsy7) * p_r.powf(qsy8)
+    }
 }
 
 /// Rolling resistance moment, Besselink 2010 eq. A48, with MFeval's low-speed shaping.
@@ -584,7 +606,7 @@ fn my(p: &TyreParams, s: &ScalingFactors, x: &Prepared, input_kappa: f64, fx: f6
         * fz0
         * s.lmy
         * (q.qsy1 + q.qsy2 * (fx / fz0) + q.qsy3 * vr.abs() + q.qsy4 * vr2 * vr2 + (q.qsy5 + q.qsy6 * fz_r) * g2)
-        * (fz_r.powf(q.qsy7) * (x.press / p.operating.nompres).powf(q.qsy8));
+        * load_pressure_factor(fz_r, x.press / p.operating.nompres, q.qsy7, q.qsy8);
     if vcx < 0.0 {
         m = -m;
     }
@@ -596,7 +618,7 @@ fn my(p: &TyreParams, s: &ScalingFactors, x: &Prepared, input_kappa: f64, fx: f6
     if input_kappa >= low && input_kappa <= high {
         let x0 = -1.0;
         let red = (std::f64::consts::FRAC_PI_2 * (input_kappa - x0)) / (high - x0);
-        m *= red.sin();
+        m *= red.fsin();
     } else if input_kappa < low {
         m = -m;
     }
@@ -647,7 +669,7 @@ fn mz_terms(p: &TyreParams, s: &ScalingFactors, mode: UseMode, x: &Prepared, b: 
         * (r0 / b.fz0p)
         * s.ltr;
     let mut et = (q.qez1 + q.qez2 * dfz + q.qez3 * dfz * dfz)
-        * (1.0 + (q.qez4 + q.qez5 * gs) * FRAC_2_PI * (bt * ct * alphat).atan());
+        * (1.0 + (q.qez4 + q.qez5 * gs) * FRAC_2_PI * (bt * ct * alphat).fatan());
     if mode.limits_check() && et > 1.0 {
         et = 1.0;
     }
@@ -658,7 +680,7 @@ fn mz_terms(p: &TyreParams, s: &ScalingFactors, mode: UseMode, x: &Prepared, b: 
             + ((q.qdz8 + q.qdz9 * dfz) * (1.0 + pr.ppz2 * dpi) + (q.qdz10 + q.qdz11 * dfz) * gs.abs()) * gs * s.lkzc)
         * s.lmuy
         * sgn(x.vcx)
-        * as_.cos();
+        * b.cos_alpha_s;
     MzTerms { alphar, alphat, bt, ct, dt, et, br, dr, kya_p }
 }
 
@@ -671,7 +693,7 @@ fn rolling_radius(p: &TyreParams, x: &Prepared, b: &Basic, input: &MfInput) -> (
     let fz0 = v.fnomin;
     let cz = v.vertical_stiffness * (1.0 + v.pfz1 * b.dpi);
     let fz_r = x.u_fz / fz0;
-    let deflection_term = (fz0 / cz) * (v.dreff * (v.breff * fz_r).atan() + v.freff * fz_r);
+    let deflection_term = (fz0 / cz) * (v.dreff * (v.breff * fz_r).fatan() + v.freff * fz_r);
     let r_omega = |omega: f64| {
         let w = omega * r0 / v0;
         r0 * (v.q_re0 + v.q_v1 * w * w)
@@ -779,10 +801,10 @@ pub fn evaluate_scaled(params: &TyreParams, scaling: &ScalingFactors, mode: UseM
         // A54/A55: equivalent slip angles combine α and κ through the slip stiffnesses.
         let k_ratio = kxk / mzt.kya_p * x.kappa;
         let k2 = k_ratio * k_ratio;
-        let tr = mzt.alphar.tan();
-        let tt = mzt.alphat.tan();
-        let alphar_eq = (tr * tr + k2).sqrt().atan() * sgn(mzt.alphar);
-        let alphat_eq = (tt * tt + k2).sqrt().atan() * sgn(mzt.alphat);
+        let tr = mzt.alphar.ftan();
+        let tt = mzt.alphat.ftan();
+        let alphar_eq = (tr * tr + k2).sqrt().fatan() * sgn(mzt.alphar);
+        let alphat_eq = (tt * tt + k2).sqrt().fatan() * sgn(mzt.alphat);
         let q = &p.aligning;
         let r0 = p.dimension.unloaded_radius;
         // A56: s uses the unscaled Fz0.
@@ -790,7 +812,7 @@ pub fn evaluate_scaled(params: &TyreParams, scaling: &ScalingFactors, mode: UseM
         let mzr = mzt.dr * cos_atan(mzt.br * alphar_eq) * x.reduction_smooth;
         let fy_p = gy * fy0_g0;
         let t = mzt.dt
-            * (mzt.ct * mf_arg(mzt.bt, alphat_eq, mzt.et).atan()).cos()
+            * (mzt.ct * mf_arg(mzt.bt, alphat_eq, mzt.et).fatan()).fcos()
             * b.cos_alpha_p
             * s.lfzo
             * x.reduction_smooth;
@@ -798,7 +820,7 @@ pub fn evaluate_scaled(params: &TyreParams, scaling: &ScalingFactors, mode: UseM
         (fx, fy, mz, t, mzr)
     } else {
         let t0 =
-            mzt.dt * (mzt.ct * mf_arg(mzt.bt, mzt.alphat, mzt.et).atan()).cos() * b.cos_alpha_p * x.reduction_smooth;
+            mzt.dt * (mzt.ct * mf_arg(mzt.bt, mzt.alphat, mzt.et).fatan()).fcos() * b.cos_alpha_p * x.reduction_smooth;
         let mzr0 = mzt.dr * cos_atan(mzt.br * mzt.alphar) * b.cos_alpha_p * x.reduction_smooth;
         let mz0 = -t0 * fy0_g0 + mzr0;
         (fx0, fy0.fy0, mz0, t0, mzr0)
