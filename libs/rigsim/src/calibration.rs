@@ -543,9 +543,9 @@ pub const GRAPH_SWEEP_CASES: [(f64, f64); 5] =
     [(6000.0, 0.0), (9000.0, 0.0), (3000.0, 0.0), (6000.0, -3.0), (6000.0, 3.0)];
 
 /// One warm-up sweep: the thesis does not give MICH2MF's warm-up block, so each of its five
-/// sweeps (the graph-sweep load cases) is a gentle constant 4 °/s sweep to ±6° followed by
+/// sweeps (the graph-sweep load cases) is a gentle constant 4 °/s sweep to ±10° followed by
 /// zero-slip rolling that fills the block to 215 s (the thesis's two blocks end at 430 s).
-pub const WARMUP_SWEEP_MAX_DEG: f64 = 6.0;
+pub const WARMUP_SWEEP_MAX_DEG: f64 = 10.0;
 /// Warm-up sweep rate [deg/s].
 pub const WARMUP_SWEEP_RATE_DEG_PER_S: f64 = 4.0;
 /// Duration of one warm-up sweep slot (sweep + rolling) [s].

@@ -111,26 +111,71 @@ pub struct TruthState {
     pub safe: bool,
 }
 
-/// A rate- and acceleration-limited position servo (slip angle, slip ratio).
+/// A rate- and acceleration-limited position servo (slip angle, slip ratio) following a
+/// streamed trajectory: velocity feed-forward from the last two setpoints, so a ramp is
+/// tracked without lag, and a braking law for steps so a plain step does not overshoot.
 #[derive(Debug, Clone, Copy, Default)]
 struct Servo {
     pos: f64,
     vel: f64,
+    /// Latest commanded position.
+    target: f64,
+    /// Feed-forward velocity estimated from the setpoint stream [unit/s].
+    ff_vel: f64,
+    /// Rig time of the latest setpoint [s].
+    target_time_s: f64,
+    /// Interval between the last two setpoints [s] (how far the target is extrapolated).
+    interval_s: f64,
 }
 
+/// Position-error time constant of the servos [s].
+const SERVO_TIME_CONSTANT_S: f64 = 0.01;
+/// The filtered slip-ratio rate must exceed the bead's limit by this factor before the tyre
+/// slips on the rim (servo ripple at exactly the limit does not count).
+const RIM_SLIP_RATE_MARGIN: f64 = 1.05;
+/// How much faster than the bead limit the tread's slip ratio rejoins the rim's after slipping.
+const RIM_REGRIP_RATE_FACTOR: f64 = 20.0;
+/// Setpoints further apart than this are steps, not a streamed trajectory [s].
+const STREAM_MAX_INTERVAL_S: f64 = 0.1;
+
 impl Servo {
-    /// Moves towards `target` as fast as the limits allow without overshoot: the speed never
-    /// exceeds what can still be braked to rest at the target, nor `rate`, and changes by at
-    /// most `accel`·dt per step.
-    fn track(&mut self, target: f64, rate: f64, accel: f64, dt: f64) {
+    /// A new commanded position at rig time `now_s`.
+    fn command(&mut self, target: f64, now_s: f64, rate: f64) {
+        let dt = now_s - self.target_time_s;
+        if dt > 0.0 && dt <= STREAM_MAX_INTERVAL_S {
+            self.ff_vel = ((target - self.target) / dt).clamp(-rate, rate);
+            self.interval_s = dt;
+        } else if dt > 0.0 {
+            self.ff_vel = 0.0;
+            self.interval_s = 0.0;
+        }
+        self.target = target;
+        self.target_time_s = now_s;
+    }
+
+    /// Holds a fixed position (no feed-forward): safe state, held axes, mode changes.
+    fn hold(&mut self, target: f64, now_s: f64) {
+        self.target = target;
+        self.ff_vel = 0.0;
+        self.interval_s = 0.0;
+        self.target_time_s = now_s;
+    }
+
+    /// One step of `dt` at rig time `now_s`.
+    fn track(&mut self, now_s: f64, rate: f64, accel: f64, dt: f64) {
+        // Extrapolate the streamed target by at most one setpoint interval.
+        let age = (now_s - self.target_time_s).clamp(0.0, self.interval_s);
+        let target = self.target + self.ff_vel * age;
+        let ff = if now_s - self.target_time_s <= self.interval_s { self.ff_vel } else { 0.0 };
         let e = target - self.pos;
-        let brake = (2.0 * accel * e.abs()).sqrt();
-        let want = e.signum() * brake.min(rate).min(e.abs() / dt);
+        // Close the error no faster than the acceleration limit can still brake to the target
+        // trajectory (time-optimal approach), so rate changes and reversals do not ring.
+        let close = (e.abs() / SERVO_TIME_CONSTANT_S).min((2.0 * accel * e.abs()).sqrt());
+        let want = (ff + e.signum() * close).clamp(-rate, rate);
         let dv = (want - self.vel).clamp(-accel * dt, accel * dt);
         self.vel += dv;
-        // The acceleration limit may have kept more speed than the target needs: stop exactly.
         let step = self.vel * dt;
-        if (e >= 0.0 && step > e) || (e <= 0.0 && step < e) {
+        if ff == 0.0 && ((e >= 0.0 && step > e) || (e <= 0.0 && step < e)) {
             self.pos = target;
             self.vel = 0.0;
         } else {
@@ -194,7 +239,6 @@ pub struct VirtualRig {
     belt_disp_m: f64,
     static_elastic_m: f64,
     commanded_slip_ratio_rate: f64,
-    last_slip_ratio_target: f64,
 
     alpha_relaxed_deg: f64,
     kappa_relaxed: f64,
@@ -213,7 +257,6 @@ pub struct VirtualRig {
     break_in_deficit: f64,
 
     model: ModelOut,
-    model_fresh: bool,
 }
 
 impl VirtualRig {
@@ -266,7 +309,6 @@ impl VirtualRig {
             belt_disp_m: 0.0,
             static_elastic_m: 0.0,
             commanded_slip_ratio_rate: 0.0,
-            last_slip_ratio_target: 0.0,
             alpha_relaxed_deg: 0.0,
             kappa_relaxed: 0.0,
             kappa_tread: 0.0,
@@ -282,7 +324,6 @@ impl VirtualRig {
             stiffness_factor: 1.0,
             break_in_deficit,
             model: ModelOut::default(),
-            model_fresh: false,
             limits,
             params,
             cfg,
@@ -352,17 +393,30 @@ impl VirtualRig {
     pub fn apply_setpoint(&mut self, sp: &RigSetpoint) -> Result<(), SetpointRefusal> {
         match self.check_setpoint(sp) {
             Ok(t) => {
-                let old_sr = self.targets.slip_ratio;
+                let now = self.time_s();
+                let l = self.limits;
+                let was_safe = self.effective_mode() == RigSetpoint::MODE_SAFE;
                 self.targets = t;
                 self.refused = false;
-                if t.mode == RigSetpoint::MODE_COUPLED && t.slip_ratio != old_sr {
-                    self.last_slip_ratio_target = old_sr;
+                let (sa, sr) = self.servo_targets(t.mode);
+                if t.mode == RigSetpoint::MODE_SAFE || was_safe || sp.hold_slip_angle {
+                    self.slip_angle.hold(sa, now);
+                } else {
+                    self.slip_angle.command(sa, now, l.slip_angle_rate_deg_per_s);
+                }
+                if t.mode != RigSetpoint::MODE_COUPLED || was_safe || sp.hold_slip_ratio {
+                    self.slip_ratio.hold(sr, now);
+                } else {
+                    self.slip_ratio.command(sr, now, l.slip_ratio_rate_per_s);
                 }
                 Ok(())
             }
             Err(r) => {
+                let now = self.time_s();
                 self.refused = true;
                 self.targets.mode = RigSetpoint::MODE_SAFE;
+                self.slip_angle.hold(0.0, now);
+                self.slip_ratio.hold(0.0, now);
                 Err(r)
             }
         }
@@ -469,6 +523,16 @@ impl VirtualRig {
         }
     }
 
+    /// Slip-angle and slip-ratio servo targets in `mode`: safe → zero; free rolling and static
+    /// → the drive does not hold a slip ratio (free rolling: zero; static: wheel locked).
+    fn servo_targets(&self, mode: u8) -> (f64, f64) {
+        match mode {
+            RigSetpoint::MODE_SAFE => (0.0, 0.0),
+            RigSetpoint::MODE_COUPLED => (self.targets.slip_angle_deg, self.targets.slip_ratio),
+            _ => (self.targets.slip_angle_deg, 0.0),
+        }
+    }
+
     fn effective_mode(&self) -> u8 {
         if self.refused { RigSetpoint::MODE_SAFE } else { self.targets.mode }
     }
@@ -486,29 +550,24 @@ impl VirtualRig {
         let l = self.limits;
 
         // --- actuators ---
-        let (sa_target, sr_target, fz_target, speed_target) = match mode {
-            RigSetpoint::MODE_SAFE => (0.0, 0.0, 0.0, 0.0),
-            RigSetpoint::MODE_FREE_ROLLING => {
-                (self.targets.slip_angle_deg, 0.0, self.targets.fz_n, self.targets.speed_mps)
-            }
-            RigSetpoint::MODE_COUPLED => {
-                (self.targets.slip_angle_deg, self.targets.slip_ratio, self.targets.fz_n, self.targets.speed_mps)
-            }
-            _ => (self.targets.slip_angle_deg, 0.0, self.targets.fz_n, 0.0),
+        let now = self.time_s();
+        let (fz_target, speed_target) = match mode {
+            RigSetpoint::MODE_SAFE => (0.0, 0.0),
+            RigSetpoint::MODE_STATIC => (self.targets.fz_n, 0.0),
+            _ => (self.targets.fz_n, self.targets.speed_mps),
         };
-        self.slip_angle.track(sa_target, l.slip_angle_rate_deg_per_s, l.slip_angle_accel_deg_per_s2, dt);
+        self.slip_angle.track(now, l.slip_angle_rate_deg_per_s, l.slip_angle_accel_deg_per_s2, dt);
         let sr_before = self.slip_ratio.pos;
-        self.slip_ratio.track(sr_target, l.slip_ratio_rate_per_s, l.slip_ratio_accel_per_s2, dt);
+        self.slip_ratio.track(now, l.slip_ratio_rate_per_s, l.slip_ratio_accel_per_s2, dt);
         let sr_rate = (self.slip_ratio.pos - sr_before) / dt;
-        // A low-pass of the commanded slip rate tells the controller model how slowly it is being
-        // asked to move (the thesis: below ~10 %/s the regulation gets rough).
+        // A low-pass of the slip rate tells the controller model how slowly it is being asked to
+        // move (the thesis: below ~10 %/s the regulation gets rough).
         let k = (dt / 0.05).min(1.0);
         self.commanded_slip_ratio_rate += k * (sr_rate.abs() - self.commanded_slip_ratio_rate);
         self.fz_n = slew(self.fz_n, fz_target, l.load_rate_n_per_s, dt);
         if mode != RigSetpoint::MODE_SAFE {
             self.camber_deg = slew(self.camber_deg, self.targets.camber_deg, l.camber_rate_deg_per_s, dt);
-            self.pressure_pa +=
-                (self.targets.pressure_pa - self.pressure_pa) * (dt / l.pressure_time_constant_s).min(1.0);
+            self.pressure_pa += (self.targets.pressure_pa - self.pressure_pa) * (dt / l.pressure_time_constant_s).min(1.0);
         }
         self.speed_mps = slew(self.speed_mps, speed_target, l.belt_accel_mps2, dt);
         let statik = mode == RigSetpoint::MODE_STATIC;
@@ -522,20 +581,21 @@ impl VirtualRig {
             self.static_elastic_m = 0.0;
         }
 
-        // --- rim slip: the tread's slip ratio cannot follow the rim faster than the bead holds ---
+        // --- rim slip: while the slip ratio changes faster than the bead holds (50 ms mean of the
+        // rate above the limit), the tyre turns on the rim and its slip ratio lags the rim's; once
+        // the rate falls the bead grips again and the two turn together (a slip ratio is a speed
+        // ratio, so no offset remains).
         let rim_kappa = self.slip_ratio.pos;
-        if self.effects.rim_slip
+        let max_rate = self.cfg.rim_slip.max_slip_ratio_rate_per_s;
+        let slipping = self.effects.rim_slip
             && mode == RigSetpoint::MODE_COUPLED
             && self.model.fx_n.abs() >= self.cfg.rim_slip.min_force_n
-        {
-            let max = self.cfg.rim_slip.max_slip_ratio_rate_per_s;
-            let before = self.kappa_tread;
-            self.kappa_tread = slew(self.kappa_tread, rim_kappa, max, dt);
-            if (self.kappa_tread - rim_kappa).abs() > 1e-12 && (self.kappa_tread - before).abs() >= max * dt * 0.999 {
-                self.rim_slip_steps += 1;
-            }
+            && self.commanded_slip_ratio_rate > max_rate * RIM_SLIP_RATE_MARGIN;
+        if slipping {
+            self.kappa_tread = slew(self.kappa_tread, rim_kappa, max_rate, dt);
+            self.rim_slip_steps += 1;
         } else {
-            self.kappa_tread = rim_kappa;
+            self.kappa_tread = slew(self.kappa_tread, rim_kappa, max_rate * RIM_REGRIP_RATE_FACTOR, dt);
         }
         let kappa_in = self.kappa_tread + self.control_wander;
 
@@ -627,7 +687,6 @@ impl VirtualRig {
             fx = -cx * self.static_elastic_m;
         }
         self.model = ModelOut { mf, fx_n: if finite { fx } else { 0.0 }, valid: finite };
-        self.model_fresh = true;
         if dt_s <= 0.0 {
             return;
         }

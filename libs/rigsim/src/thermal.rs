@@ -87,7 +87,7 @@ impl ThermalState {
         }
         let qb = bulk_power + to_bulk - p.bulk_to_air_w_per_k * (self.bulk_c - u.ambient_c);
         self.bulk_c += qb / p.bulk_heat_capacity_j_per_k * dt_s;
-        let target = p.flash_k_per_kw * total_power * 1e-3;
+        let target = (p.flash_lateral_k_per_kw * u.lateral_power_w + p.flash_longitudinal_k_per_kw * u.longitudinal_power_w) * 1e-3;
         let a = 1.0 - (-dt_s / p.flash_time_constant_s).exp();
         self.flash_k += (target - self.flash_k) * a;
     }

@@ -1,0 +1,217 @@
+//! How the thermal parameters in `launch-config/virtual_rig.toml` were found: a Nelder–Mead
+//! search (log-parameters, fractions through a logistic) minimising the squared, tolerance-
+//! normalised misses of the six peak temperatures (±10 %), six sweep + cool-down times (±20 %)
+//! of Tables 3.6.2-H/I and the warm-up (31 °C after block 1, 42 °C after block 2), plus a
+//! penalty for every rank the thesis's columns do not share. Run once; its best vector is what
+//! the config holds.
+//!
+//! `cargo run --release -p rigsim --example tune_thermal [evaluations]`
+
+use std::path::PathBuf;
+
+use rigsim::calibration::{
+    BASELINE_C, SweepKind, THESIS_BRKDRV, THESIS_FREEROLLING, brkdrv_setup, freerolling_setup, run_sweep, run_warmup,
+    settle,
+};
+use rigsim::{RigConfig, TyreParams, VirtualRig};
+
+const NAMES: [&str; 13] = [
+    "surface_heat_capacity_j_per_k",
+    "bulk_heat_capacity_j_per_k",
+    "surface_bulk_conductance_w_per_k",
+    "convection_w_per_k",
+    "convection_speed_w_per_k",
+    "belt_contact_w_per_k",
+    "bulk_to_air_w_per_k",
+    "surface_fraction_lateral",
+    "surface_fraction_longitudinal",
+    "rolling_loss_coefficient",
+    "flash_lateral_k_per_kw",
+    "flash_longitudinal_k_per_kw",
+    "flash_time_constant_s",
+];
+
+fn is_fraction(i: usize) -> bool {
+    i == 7 || i == 8
+}
+
+fn get(cfg: &RigConfig) -> Vec<f64> {
+    let t = &cfg.thermal;
+    vec![
+        t.surface_heat_capacity_j_per_k,
+        t.bulk_heat_capacity_j_per_k,
+        t.surface_bulk_conductance_w_per_k,
+        t.convection_w_per_k,
+        t.convection_speed_w_per_k,
+        t.belt_contact_w_per_k,
+        t.bulk_to_air_w_per_k,
+        t.surface_fraction_lateral,
+        t.surface_fraction_longitudinal,
+        t.rolling_loss_coefficient,
+        t.flash_lateral_k_per_kw,
+        t.flash_longitudinal_k_per_kw,
+        t.flash_time_constant_s,
+    ]
+}
+
+fn set(cfg: &mut RigConfig, v: &[f64]) {
+    let t = &mut cfg.thermal;
+    t.surface_heat_capacity_j_per_k = v[0];
+    t.bulk_heat_capacity_j_per_k = v[1];
+    t.surface_bulk_conductance_w_per_k = v[2];
+    t.convection_w_per_k = v[3];
+    t.convection_speed_w_per_k = v[4];
+    t.belt_contact_w_per_k = v[5];
+    t.bulk_to_air_w_per_k = v[6];
+    t.surface_fraction_lateral = v[7];
+    t.surface_fraction_longitudinal = v[8];
+    t.rolling_loss_coefficient = v[9];
+    t.flash_lateral_k_per_kw = v[10];
+    t.flash_longitudinal_k_per_kw = v[11];
+    t.flash_time_constant_s = v[12];
+}
+
+fn to_x(v: &[f64]) -> Vec<f64> {
+    v.iter()
+        .enumerate()
+        .map(|(i, &p)| if is_fraction(i) { (p.clamp(1e-4, 1.0 - 1e-4) / (1.0 - p.clamp(1e-4, 1.0 - 1e-4))).ln() } else { p.ln() })
+        .collect()
+}
+
+fn from_x(x: &[f64]) -> Vec<f64> {
+    x.iter().enumerate().map(|(i, &y)| if is_fraction(i) { 1.0 / (1.0 + (-y).exp()) } else { y.exp() }).collect()
+}
+
+/// (peak, sweep+cool) of the six comparison sweeps and the warm-up temperatures.
+fn simulate(cfg: &RigConfig, params: &TyreParams) -> Option<(Vec<(f64, f64)>, Vec<f64>)> {
+    let mut out = Vec::new();
+    for fr in [true, false] {
+        for kind in SweepKind::ALL {
+            let s = if fr { freerolling_setup(kind) } else { brkdrv_setup(kind) };
+            let mut rig = VirtualRig::new(cfg.clone(), params.clone(), cfg.seed).ok()?;
+            rig.complete_break_in();
+            settle(&mut rig, &s, 8.0).ok()?;
+            rig.soak(BASELINE_C);
+            let o = run_sweep(&mut rig, &s, BASELINE_C, 150.0).ok()?;
+            out.push((o.peak_temp_c, o.sweep_plus_cool_s()));
+        }
+    }
+    let mut wcfg = cfg.clone();
+    wcfg.environment.initial_tyre_temp_c = 20.0;
+    let mut rig = VirtualRig::new(wcfg, params.clone(), cfg.seed).ok()?;
+    let w = run_warmup(&mut rig, 2).ok()?;
+    Some((out, w))
+}
+
+fn loss(cfg: &RigConfig, params: &TyreParams, verbose: bool) -> f64 {
+    let Some((out, w)) = simulate(cfg, params) else { return 1e9 };
+    let thesis: Vec<_> = THESIS_FREEROLLING.iter().chain(THESIS_BRKDRV.iter()).collect();
+    let mut l = 0.0;
+    let hinge = |err: f64, tol: f64| {
+        let r = err / tol;
+        r * r + if r.abs() > 0.9 { 10.0 * (r.abs() - 0.9) } else { 0.0 }
+    };
+    for (i, (peak, time)) in out.iter().enumerate() {
+        let t = thesis[i];
+        l += hinge(peak - t.peak_temp_c, 0.1 * t.peak_temp_c);
+        // BrkDrv variable (i = 5): the thesis's sweep (sw14) had a 10 % threshold, so its time is
+        // not reachable with the 2 % one; left out of the fit rather than bending the others.
+        if i != 5 {
+            l += hinge(time - t.sweep_plus_cool_s, 0.2 * t.sweep_plus_cool_s);
+        }
+        if verbose {
+            println!("  sweep {i}: peak {peak:6.1} (thesis {:5.1})  time {time:7.2} (thesis {:6.2})", t.peak_temp_c, t.sweep_plus_cool_s);
+        }
+    }
+    for table in 0..2 {
+        for i in 0..3 {
+            for j in 0..3 {
+                let (a, b) = (&out[table * 3 + i], &out[table * 3 + j]);
+                let (ta, tb) = (thesis[table * 3 + i], thesis[table * 3 + j]);
+                if ta.peak_temp_c < tb.peak_temp_c && a.0 >= b.0 {
+                    l += 2.0 + (a.0 - b.0) / 2.0;
+                }
+                if ta.sweep_plus_cool_s < tb.sweep_plus_cool_s && a.1 >= b.1 && table * 3 + j != 5 && table * 3 + i != 5 {
+                    l += 2.0 + (a.1 - b.1) / 2.0;
+                }
+            }
+        }
+    }
+    l += hinge(w[1] - 42.5, 2.5);
+    l += 0.3 * hinge(w[0] - 31.0, 5.0);
+    if verbose {
+        println!("  warm-up {:.1} / {:.1}", w[0], w[1]);
+    }
+    l
+}
+
+fn main() -> Result<(), Box<dyn std::error::Error>> {
+    let evals: usize = std::env::args().nth(1).and_then(|s| s.parse().ok()).unwrap_or(300);
+    let path = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../launch-config/virtual_rig.toml");
+    let cfg0 = RigConfig::load(&path)?;
+    let params = TyreParams::read_tir(&cfg0.tyre_file)?;
+    let x0 = to_x(&get(&cfg0));
+    let n = x0.len();
+    let f = |x: &[f64]| {
+        let mut c = cfg0.clone();
+        set(&mut c, &from_x(x));
+        if c.validate().is_err() {
+            return 1e9;
+        }
+        loss(&c, &params, false)
+    };
+    // Nelder–Mead.
+    let mut simplex: Vec<(Vec<f64>, f64)> = Vec::new();
+    simplex.push((x0.clone(), f(&x0)));
+    for i in 0..n {
+        let mut x = x0.clone();
+        x[i] += 0.4;
+        let v = f(&x);
+        simplex.push((x, v));
+    }
+    let mut count = n + 1;
+    while count < evals {
+        simplex.sort_by(|a, b| a.1.total_cmp(&b.1));
+        if count % 20 < 2 {
+            eprintln!("eval {count}: best {:.3}", simplex[0].1);
+        }
+        let centroid: Vec<f64> = (0..n).map(|k| simplex[..n].iter().map(|p| p.0[k]).sum::<f64>() / n as f64).collect();
+        let worst = simplex[n].clone();
+        let pt = |t: f64| -> Vec<f64> { (0..n).map(|k| centroid[k] + t * (worst.0[k] - centroid[k])).collect() };
+        let xr = pt(-1.0);
+        let fr = f(&xr);
+        count += 1;
+        if fr < simplex[0].1 {
+            let xe = pt(-2.0);
+            let fe = f(&xe);
+            count += 1;
+            simplex[n] = if fe < fr { (xe, fe) } else { (xr, fr) };
+        } else if fr < simplex[n - 1].1 {
+            simplex[n] = (xr, fr);
+        } else {
+            let xc = if fr < worst.1 { pt(-0.5) } else { pt(0.5) };
+            let fc = f(&xc);
+            count += 1;
+            if fc < worst.1.min(fr) {
+                simplex[n] = (xc, fc);
+            } else {
+                let best = simplex[0].0.clone();
+                for p in simplex.iter_mut().skip(1) {
+                    p.0 = (0..n).map(|k| best[k] + 0.5 * (p.0[k] - best[k])).collect();
+                    p.1 = f(&p.0);
+                    count += 1;
+                }
+            }
+        }
+    }
+    simplex.sort_by(|a, b| a.1.total_cmp(&b.1));
+    let best = from_x(&simplex[0].0);
+    println!("best loss {:.4}", simplex[0].1);
+    for (k, v) in NAMES.iter().zip(&best) {
+        println!("{k} = {v:.6}");
+    }
+    let mut c = cfg0.clone();
+    set(&mut c, &best);
+    loss(&c, &params, true);
+    Ok(())
+}
