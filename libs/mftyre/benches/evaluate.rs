@@ -1,5 +1,7 @@
 //! Evaluations per second: pure Fy only and the full combined-slip output set, over a batch of
-//! one million operating points spread over the sample tyre's valid input box.
+//! one million operating points — once spread at random over the sample tyre's valid input box
+//! (every point a new load case) and once arranged as a rig measures them: 1,000 sweeps of
+//! 1,000 points, each at one load, pressure and camber (pure α, pure κ and combined sweeps).
 //!
 //! Run: `cargo bench -p mftyre --bench evaluate -- --warm-up-time 1 --measurement-time 3`
 //! Criterion reports throughput in elements/s = evaluations per second on one core.
@@ -32,6 +34,37 @@ struct Columns {
     gamma: Vec<f64>,
     vx: Vec<f64>,
     p: Vec<f64>,
+}
+
+/// 1,000 sweeps × 1,000 points: alternating pure-α, pure-κ and κ-at-α sweeps, each at one
+/// (Fz, camber) load case, as a flat-track procedure produces them.
+fn sweep_columns() -> Columns {
+    let mut c = Columns {
+        fz: Vec::with_capacity(N),
+        kappa: Vec::with_capacity(N),
+        alpha: Vec::with_capacity(N),
+        gamma: Vec::with_capacity(N),
+        vx: Vec::with_capacity(N),
+        p: Vec::with_capacity(N),
+    };
+    for i in 0..N {
+        let case = i / 1000;
+        let t = (i % 1000) as f64 / 999.0;
+        let fz = 2000.0 + 10.0 * case as f64;
+        let gamma = ((case % 5) as f64 - 2.0) * 0.02;
+        let (kappa, alpha) = match case % 3 {
+            0 => (0.0, 0.5 * t - 0.25),
+            1 => (t - 0.5, 0.0),
+            _ => (0.6 * t - 0.3, 0.05),
+        };
+        c.fz.push(fz);
+        c.kappa.push(kappa);
+        c.alpha.push(alpha);
+        c.gamma.push(gamma);
+        c.vx.push(16.6);
+        c.p.push(260000.0);
+    }
+    c
 }
 
 fn columns() -> Columns {
@@ -88,6 +121,29 @@ fn bench(c: &mut Criterion) {
     group.bench_function("full_combined_111", |b| {
         b.iter(|| {
             evaluate_batch(&params, UseMode::M111, black_box(&inputs), &mut out).ok();
+            black_box(&out);
+        })
+    });
+
+    let sw = sweep_columns();
+    let sweeps = BatchInput {
+        fz_n: &sw.fz,
+        kappa: &sw.kappa,
+        alpha_rad: &sw.alpha,
+        gamma_rad: &sw.gamma,
+        vx_mps: &sw.vx,
+        p_pa: &sw.p,
+        ..Default::default()
+    };
+    group.bench_function("pure_fy_sweeps", |b| {
+        b.iter(|| {
+            pure_fy_batch(&params, UseMode::M111, black_box(&sweeps), &mut fy).ok();
+            black_box(&fy);
+        })
+    });
+    group.bench_function("full_combined_111_sweeps", |b| {
+        b.iter(|| {
+            evaluate_batch(&params, UseMode::M111, black_box(&sweeps), &mut out).ok();
             black_box(&out);
         })
     });

@@ -1,6 +1,6 @@
 //! Struct-of-arrays evaluation for fitting and simulation.
 
-use crate::model::{Clamped, MfInput, MfOutput, UseMode, evaluate_scaled};
+use crate::model::{Clamped, MfInput, MfOutput, SweepEvaluator, UseMode};
 use crate::params::{ScalingFactors, TyreParams};
 
 /// Inputs as parallel slices. `fz_n` sets the batch length; every other slice is either empty
@@ -204,7 +204,9 @@ impl BatchOutput {
     }
 }
 
-/// Evaluates every point of `inputs` into `out` (cleared first; allocations reused).
+/// Evaluates every point of `inputs` into `out` (cleared first; allocations reused). Runs of
+/// points that share Fz, pressure and camber (sweeps) reuse the load-dependent terms; the
+/// results are identical to [`crate::evaluate`] point by point.
 pub fn evaluate_batch(
     params: &TyreParams,
     mode: UseMode,
@@ -225,8 +227,10 @@ pub fn evaluate_batch_scaled(
     let n = inputs.validate()?;
     out.clear();
     out.reserve(n);
+    // Consecutive points with the same load case (a sweep) share the load-dependent terms.
+    let mut ev = SweepEvaluator::new(params, scaling, mode);
     for i in 0..n {
-        let o = evaluate_scaled(params, scaling, mode, &inputs.point(i));
+        let o = ev.eval(&inputs.point(i));
         out.push(&o);
     }
     Ok(())

@@ -9,6 +9,10 @@
 //! tested to. Arguments beyond the range where the three-part π/4 reduction is exact fall back
 //! to the standard library.
 
+// The constants are quoted with the digits they are published with; rounding them by hand
+// would only add a chance of a typo.
+#![allow(clippy::excessive_precision)]
+
 use std::f64::consts::{FRAC_PI_2, FRAC_PI_4};
 
 /// Beyond this |x| the reduction constants lose accuracy; defer to libm.
@@ -20,7 +24,6 @@ const DP1: f64 = 7.853_981_256_484_985_351_56e-1;
 const DP2: f64 = 3.774_894_707_930_798_176_68e-8;
 const DP3: f64 = 2.695_151_429_079_059_526_45e-15;
 
-#[allow(clippy::excessive_precision)]
 const SIN_C: [f64; 6] = [
     1.589_623_015_765_465_680_60e-10,
     -2.505_074_776_285_780_728_66e-8,
@@ -30,7 +33,6 @@ const SIN_C: [f64; 6] = [
     -1.666_666_666_666_663_072_95e-1,
 ];
 
-#[allow(clippy::excessive_precision)]
 const COS_C: [f64; 6] = [
     -1.135_853_652_138_768_173_00e-11,
     2.087_570_084_197_473_167_78e-9,
@@ -40,7 +42,6 @@ const COS_C: [f64; 6] = [
     4.166_666_666_666_659_292_18e-2,
 ];
 
-#[allow(clippy::excessive_precision)]
 const ATAN_P: [f64; 5] = [
     -8.750_608_600_031_904_122_785e-1,
     -1.615_753_718_733_365_076_637e1,
@@ -49,7 +50,6 @@ const ATAN_P: [f64; 5] = [
     -6.485_021_904_942_025_371_773e1,
 ];
 
-#[allow(clippy::excessive_precision)]
 const ATAN_Q: [f64; 5] = [
     2.485_846_490_142_306_297_962e1,
     1.650_270_098_316_988_542_046e2,
@@ -89,7 +89,7 @@ fn reduce(ax: f64) -> (f64, u32) {
 #[inline(always)]
 pub(crate) fn sin(x: f64) -> f64 {
     let ax = x.abs();
-    if !(ax < REDUCTION_LIMIT) {
+    if ax >= REDUCTION_LIMIT || ax.is_nan() {
         return x.sin();
     }
     let (z, j) = reduce(ax);
@@ -104,7 +104,7 @@ pub(crate) fn sin(x: f64) -> f64 {
 #[inline(always)]
 pub(crate) fn cos(x: f64) -> f64 {
     let ax = x.abs();
-    if !(ax < REDUCTION_LIMIT) {
+    if ax >= REDUCTION_LIMIT || ax.is_nan() {
         return x.cos();
     }
     let (z, j) = reduce(ax);
@@ -118,7 +118,7 @@ pub(crate) fn cos(x: f64) -> f64 {
 #[inline(always)]
 pub(crate) fn sin_cos(x: f64) -> (f64, f64) {
     let ax = x.abs();
-    if !(ax < REDUCTION_LIMIT) {
+    if ax >= REDUCTION_LIMIT || ax.is_nan() {
         return x.sin_cos();
     }
     let (z, j) = reduce(ax);

@@ -98,6 +98,16 @@ impl UseMode {
         matches!(self, UseMode::M121 | UseMode::M122 | UseMode::M221 | UseMode::M222)
     }
 
+    /// The same mode with pure-slip output (units digit 2).
+    pub fn pure(self) -> UseMode {
+        match self {
+            UseMode::M111 | UseMode::M112 => UseMode::M112,
+            UseMode::M121 | UseMode::M122 => UseMode::M122,
+            UseMode::M211 | UseMode::M212 => UseMode::M212,
+            UseMode::M221 | UseMode::M222 => UseMode::M222,
+        }
+    }
+
     /// Combined-slip weighting applies (otherwise pure-slip forces and moments).
     pub fn combined(self) -> bool {
         matches!(self, UseMode::M111 | UseMode::M121 | UseMode::M211 | UseMode::M221)
@@ -373,240 +383,343 @@ fn prepare(p: &TyreParams, mode: UseMode, input: &MfInput) -> Prepared {
     Prepared { fz, fz_low, u_fz, kappa, kappa_out, alpha, gamma, vcx, press, reduction_smooth, clamped }
 }
 
-/// Quantities shared by all force and moment equations.
-#[derive(Clone, Copy)]
-struct Basic {
-    fz0: f64,
-    fz0p: f64,
-    dfz: f64,
-    dpi: f64,
-    alpha_s: f64,
-    gamma_s: f64,
-    /// cos α' = Vcx/V'c (4.E6).
-    cos_alpha_p: f64,
-    /// cos α*, for the residual moment's Dr (4.E47).
-    cos_alpha_s: f64,
-}
-
-#[inline(always)]
-fn basic(p: &TyreParams, s: &ScalingFactors, mode: UseMode, x: &Prepared) -> Basic {
-    let fz0 = p.vertical.fnomin;
-    let fz0p = fz0 * s.lfzo;
-    let dfz = (x.fz - fz0p) / fz0p;
-    let nompres = p.operating.nompres;
-    let dpi = (x.press - nompres) / nompres;
-    // One sin/cos pair serves tan α (for V'c and α*) and cos α* (for Dr) in the TNO mode.
-    let (sin_alpha, cos_alpha) = sin_cos(x.alpha);
-    let tan_alpha = sin_alpha / cos_alpha;
-    let (alpha_s, gamma_s, cos_alpha_s) = if mode.alpha_star() {
-        let a = tan_alpha * sgn1(x.vcx);
-        (a, x.gamma.fsin(), a.fcos())
-    } else {
-        (x.alpha, x.gamma, cos_alpha)
-    };
-    let vsy = tan_alpha * x.vcx.abs();
-    let vc = (x.vcx * x.vcx + vsy * vsy).sqrt();
-    let vc_p = vc + EPS;
-    let cos_alpha_p = (x.vcx / vc_p).clamp(-1.0, 1.0);
-    Basic { fz0, fz0p, dfz, dpi, alpha_s, gamma_s, cos_alpha_p, cos_alpha_s }
-}
-
-/// Pure longitudinal force (4.E9–4.E18) → (Fx0, μx, Kxκ).
-#[inline(always)]
-fn fx0(p: &TyreParams, s: &ScalingFactors, mode: UseMode, x: &Prepared, b: &Basic) -> (f64, f64, f64) {
-    let c = &p.pure_fx;
-    let pr = &p.pressure;
-    let (dfz, dpi, fz) = (b.dfz, b.dpi, x.fz);
-    let cx = c.pcx1 * s.lcx;
-    let mut mux = (c.pdx1 + c.pdx2 * dfz)
-        * (1.0 + pr.ppx3 * dpi + pr.ppx4 * dpi * dpi)
-        * (1.0 - c.pdx3 * x.gamma * x.gamma)
-        * s.lmux;
-    if fz == 0.0 {
-        mux = 0.0;
-    }
-    let dx = mux * fz;
-    let kxk = fz * (c.pkx1 + c.pkx2 * dfz) * (c.pkx3 * dfz).exp() * (1.0 + pr.ppx1 * dpi + pr.ppx2 * dpi * dpi) * s.lkx;
-    let bx = kxk / (cx * dx + EPS * sgn1(dx));
-    let shx = (c.phx1 + c.phx2 * dfz) * s.lhx * x.reduction_smooth;
-    let svx = fz * (c.pvx1 + c.pvx2 * dfz) * s.lvx * s.lmux * x.reduction_smooth;
-    let kx = x.kappa + shx;
-    let mut ex = (c.pex1 + c.pex2 * dfz + c.pex3 * dfz * dfz) * (1.0 - c.pex4 * sgn(kx)) * s.lex;
-    if mode.limits_check() && ex > 1.0 {
-        ex = 1.0;
-    }
-    let mut f = dx * (cx * mf_arg(bx, kx, ex).fatan()).fsin() + svx;
-    if x.vcx < 0.0 {
-        f = -f;
-    }
-    (f, mux, kxk)
-}
-
-/// Pure lateral force terms (4.E19–4.E30).
-#[derive(Clone, Copy)]
-struct Fy0Terms {
-    fy0: f64,
-    muy: f64,
+/// Pure lateral force terms that depend on the load case only (4.E20–4.E30).
+#[derive(Clone, Copy, Default)]
+struct FyLoad {
     kya: f64,
     shy: f64,
     svy: f64,
-    by: f64,
     cy: f64,
+    muy: f64,
+    dy: f64,
+    by: f64,
+    /// Ey = ey_a·(ey_b − ey_c·sgn αy).
+    ey_a: f64,
+    ey_b: f64,
+    ey_c: f64,
+}
+
+/// Everything that depends only on the load case — Fz, pressure, camber and the low-speed
+/// factor — for one parameter set, scaling and mode. A sweep shares one load case across all its
+/// points, so batches compute this once per run of equal load cases.
+#[derive(Clone, Copy, Default)]
+struct LoadTerms {
+    /// Bit patterns of (Fz, Fz_low, uFz, p, γ, low-speed factor) this was computed for.
+    key: [u64; 6],
+    fz0: f64,
+    gamma_s: f64,
+    // Pure Fx (4.E9–4.E18).
+    cx: f64,
+    mux: f64,
+    dx: f64,
+    kxk: f64,
+    bx: f64,
+    shx: f64,
+    svx: f64,
+    ex_a: f64,
+    pex4: f64,
+    // Pure Fy at γ* and at γ = 0 (the latter for Mz's F'y).
+    fy: FyLoad,
+    fy_g0: FyLoad,
+    // Combined slip (4.E50–4.E67).
+    exa: f64,
+    bxa_a: f64,
+    shyk: f64,
+    eyk: f64,
+    byk_a: f64,
+    dvyk_a: f64,
+    // Aligning moment (A54–A60, 4.E31–4.E47).
+    kya_p: f64,
+    shf: f64,
+    sht: f64,
+    bt: f64,
+    ct: f64,
+    dt: f64,
+    et_a: f64,
+    et_b: f64,
+    br: f64,
+    dr_a: f64,
+    s_a: f64,
+    s_fy: f64,
+    // Overturning moment: R0·Fz·λMx, the Fy-free part and the QSX4 cosine factor.
+    mx_fz_lmx: f64,
+    mx_const: f64,
+    mx_q4: f64,
+    mx_fy_lin: f64,
+    // Rolling resistance: −R0·Fz0·λMy·(Fz/Fz0)^QSY7·(p/p0)^QSY8 and the camber term.
+    my_scale: f64,
+    my_gamma: f64,
+    // Radii and stiffnesses.
+    deflection_term: f64,
+    ext_scale: f64,
+    q_fz1: f64,
+    a_m: f64,
+    b_m: f64,
+    cx_carcass: f64,
+    cy_carcass: f64,
+}
+
+fn load_key(x: &Prepared) -> [u64; 6] {
+    [
+        x.fz.to_bits(),
+        x.fz_low.to_bits(),
+        x.u_fz.to_bits(),
+        x.press.to_bits(),
+        x.gamma.to_bits(),
+        x.reduction_smooth.to_bits(),
+    ]
 }
 
 /// Cornering stiffness Kyα (4.E25) at a given γ*.
 #[inline(always)]
-fn kya(p: &TyreParams, s: &ScalingFactors, b: &Basic, fz: f64, gamma_s: f64) -> f64 {
+fn kya(p: &TyreParams, s: &ScalingFactors, fz0p: f64, dpi: f64, fz: f64, gamma_s: f64) -> f64 {
     let c = &p.pure_fy;
     let pr = &p.pressure;
     c.pky1
-        * b.fz0p
-        * (1.0 + pr.ppy1 * b.dpi)
+        * fz0p
+        * (1.0 + pr.ppy1 * dpi)
         * (1.0 - c.pky3 * gamma_s.abs())
-        * (c.pky4 * ((fz / b.fz0p) / ((c.pky2 + c.pky5 * gamma_s * gamma_s) * (1.0 + pr.ppy2 * b.dpi))).fatan()).fsin()
+        * (c.pky4 * ((fz / fz0p) / ((c.pky2 + c.pky5 * gamma_s * gamma_s) * (1.0 + pr.ppy2 * dpi))).fatan()).fsin()
         * s.lky
 }
 
-/// Pure lateral force at γ* = `gamma_s` with cornering stiffness `kya` already computed.
+/// Load-case part of pure Fy at γ* = `gamma_s`.
 #[inline(always)]
-fn fy0_with(
-    p: &TyreParams,
-    s: &ScalingFactors,
-    mode: UseMode,
-    x: &Prepared,
-    b: &Basic,
-    gamma_s: f64,
-    kya: f64,
-) -> Fy0Terms {
+fn fy_load(p: &TyreParams, s: &ScalingFactors, x: &Prepared, fz0p: f64, dfz: f64, dpi: f64, gamma_s: f64) -> FyLoad {
     let c = &p.pure_fy;
     let pr = &p.pressure;
-    let (dfz, dpi, fz) = (b.dfz, b.dpi, x.fz);
+    let fz = x.fz;
+    let kya = kya(p, s, fz0p, dpi, fz, gamma_s);
     let svyg = fz * (c.pvy3 + c.pvy4 * dfz) * gamma_s * s.lkyc * s.lmuy;
     let kyg0 = fz * (c.pky6 + c.pky7 * dfz) * (1.0 + pr.ppy5 * dpi) * s.lkyc;
     let kya_p = kya + EPS * sgn1(kya);
     let shy = ((c.phy1 + c.phy2 * dfz) * s.lhy + (kyg0 * gamma_s - svyg) / kya_p) * x.reduction_smooth;
     let svy = (fz * (c.pvy1 + c.pvy2 * dfz) * s.lvy * s.lmuy + svyg) * x.reduction_smooth;
-    let alphay = b.alpha_s + shy;
     let cy = c.pcy1 * s.lcy;
-    let mut muy = (c.pdy1 + c.pdy2 * dfz)
+    let muy = (c.pdy1 + c.pdy2 * dfz)
         * (1.0 + pr.ppy3 * dpi + pr.ppy4 * dpi * dpi)
         * (1.0 - c.pdy3 * gamma_s * gamma_s)
         * s.lmuy;
     let dy = muy * fz;
-    let mut ey = (c.pey1 + c.pey2 * dfz)
-        * (1.0 + c.pey5 * gamma_s * gamma_s - (c.pey3 + c.pey4 * gamma_s) * sgn(alphay))
-        * s.ley;
+    let by = kya / (cy * dy + EPS * sgn1(dy));
+    FyLoad {
+        kya,
+        shy,
+        svy,
+        cy,
+        muy,
+        dy,
+        by,
+        ey_a: (c.pey1 + c.pey2 * dfz) * s.ley,
+        ey_b: 1.0 + c.pey5 * gamma_s * gamma_s,
+        ey_c: c.pey3 + c.pey4 * gamma_s,
+    }
+}
+
+/// Pure lateral force (4.E19) at slip angle α* from its load-case terms.
+#[inline(always)]
+fn fy_kernel(f: &FyLoad, mode: UseMode, alpha_s: f64, vcx: f64) -> f64 {
+    let alphay = alpha_s + f.shy;
+    let mut ey = f.ey_a * (f.ey_b - f.ey_c * sgn(alphay));
     if mode.limits_check() && ey > 1.0 {
         ey = 1.0;
     }
-    let by = kya / (cy * dy + EPS * sgn1(dy));
-    let mut fy0 = dy * (cy * mf_arg(by, alphay, ey).fatan()).fsin() + svy;
-    if mode.alpha_star() && x.vcx < 0.0 {
-        fy0 = -fy0;
-    }
-    if fz == 0.0 {
-        muy = 0.0;
-    }
-    Fy0Terms { fy0, muy, kya, shy, svy, by, cy }
-}
-
-/// Gxα (4.E51–4.E57).
-#[inline(always)]
-fn gxa(p: &TyreParams, s: &ScalingFactors, mode: UseMode, x: &Prepared, b: &Basic) -> f64 {
-    let c = &p.combined;
-    let cxa = c.rcx1;
-    let mut exa = c.rex1 + c.rex2 * b.dfz;
-    if mode.limits_check() && exa > 1.0 {
-        exa = 1.0;
-    }
-    let shxa = c.rhx1;
-    let bxa = (c.rbx1 + c.rbx3 * b.gamma_s * b.gamma_s) * cos_atan(c.rbx2 * x.kappa) * s.lxal;
-    let alphas = b.alpha_s + shxa;
-    let g0 = (cxa * mf_arg(bxa, shxa, exa).fatan()).fcos();
-    (cxa * mf_arg(bxa, alphas, exa).fatan()).fcos() / g0
-}
-
-/// Gyκ and SVyκ (4.E58–4.E67).
-#[inline(always)]
-fn gyk(p: &TyreParams, s: &ScalingFactors, mode: UseMode, x: &Prepared, b: &Basic, muy: f64) -> (f64, f64) {
-    let c = &p.combined;
-    let (dfz, gs, as_) = (b.dfz, b.gamma_s, b.alpha_s);
-    let dvyk = muy * x.fz * (c.rvy1 + c.rvy2 * dfz + c.rvy3 * gs) * cos_atan(c.rvy4 * as_);
-    let svyk = dvyk * (c.rvy5 * (c.rvy6 * x.kappa).fatan()).fsin() * s.lvyka * x.reduction_smooth;
-    let shyk = c.rhy1 + c.rhy2 * dfz;
-    let mut eyk = c.rey1 + c.rey2 * dfz;
-    if mode.limits_check() && eyk > 1.0 {
-        eyk = 1.0;
-    }
-    let cyk = c.rcy1;
-    let byk = (c.rby1 + c.rby4 * gs * gs) * cos_atan(c.rby2 * (as_ - c.rby3)) * s.lyka;
-    let kappas = x.kappa + shyk;
-    let g0 = (cyk * mf_arg(byk, shyk, eyk).fatan()).fcos();
-    let g = (cyk * mf_arg(byk, kappas, eyk).fatan()).fcos() / g0;
-    (g, svyk)
-}
-
-/// Overturning moment, TNO/Besselink form (includes QSX12–14).
-#[inline(always)]
-fn mx(p: &TyreParams, s: &ScalingFactors, x: &Prepared, b: &Basic, fy: f64) -> f64 {
-    let q = &p.overturning;
-    let r0 = p.dimension.unloaded_radius;
-    let fz0 = b.fz0;
-    let g = x.gamma;
-    let mut fz = x.fz;
-    let fzmin = p.limits.fzmin;
-    if fzmin > 0.0 && fz < fzmin {
-        // Below FZMIN MFeval fades Mx out with (Fz/FZMIN)² rather than clamping.
-        fz *= (fz / fzmin) * (fz / fzmin);
-    }
-    let fz_r = fz / fz0;
-    let fy_r = fy / fz0;
-    r0 * fz
-        * s.lmx
-        * (q.qsx1 * s.lvmx - q.qsx2 * g * (1.0 + p.pressure.ppmx1 * b.dpi)
-            + q.qsx3 * fy_r
-            + q.qsx4
-                * (q.qsx5 * ((q.qsx6 * fz_r) * (q.qsx6 * fz_r)).fatan()).fcos()
-                * (q.qsx7 * g + q.qsx8 * (q.qsx9 * fy_r).fatan()).fsin()
-            + q.qsx10 * (q.qsx11 * fz_r).fatan() * g)
-        + r0 * s.lmx * (fy * (q.qsx13 + q.qsx14 * g.abs()) - fz * q.qsx12 * g * g.abs())
+    let fy0 = f.dy * (f.cy * mf_arg(f.by, alphay, ey).fatan()).fsin() + f.svy;
+    if mode.alpha_star() && vcx < 0.0 { -fy0 } else { fy0 }
 }
 
 /// (Fz/Fz0)^QSY7 · (p/p0)^QSY8 with one exp instead of two powf calls.
 #[inline(always)]
 fn load_pressure_factor(fz_r: f64, p_r: f64, qsy7: f64, qsy8: f64) -> f64 {
-    if fz_r > 0.0 && p_r > 0.0 {
-        (qsy7 * fz_r.ln() + qsy8 * p_r.ln()).exp()
-    } else {
-        fz_r.powf(qsy7) * p_r.powf(qsy8)
+    if fz_r > 0.0 && p_r > 0.0 { (qsy7 * fz_r.ln() + qsy8 * p_r.ln()).exp() } else { fz_r.powf(qsy7) * p_r.powf(qsy8) }
+}
+
+impl LoadTerms {
+    #[inline(always)]
+    fn new(p: &TyreParams, s: &ScalingFactors, mode: UseMode, x: &Prepared) -> Self {
+        let fz0 = p.vertical.fnomin;
+        let fz0p = fz0 * s.lfzo;
+        let fz = x.fz;
+        let dfz = (fz - fz0p) / fz0p;
+        let nompres = p.operating.nompres;
+        let dpi = (x.press - nompres) / nompres;
+        let gamma_s = if mode.alpha_star() { x.gamma.fsin() } else { x.gamma };
+        let g = x.gamma;
+        let r0 = p.dimension.unloaded_radius;
+
+        // Pure Fx.
+        let c = &p.pure_fx;
+        let pr = &p.pressure;
+        let cx = c.pcx1 * s.lcx;
+        let mut mux =
+            (c.pdx1 + c.pdx2 * dfz) * (1.0 + pr.ppx3 * dpi + pr.ppx4 * dpi * dpi) * (1.0 - c.pdx3 * g * g) * s.lmux;
+        if fz == 0.0 {
+            mux = 0.0;
+        }
+        let dx = mux * fz;
+        let kxk =
+            fz * (c.pkx1 + c.pkx2 * dfz) * (c.pkx3 * dfz).exp() * (1.0 + pr.ppx1 * dpi + pr.ppx2 * dpi * dpi) * s.lkx;
+        let bx = kxk / (cx * dx + EPS * sgn1(dx));
+        let shx = (c.phx1 + c.phx2 * dfz) * s.lhx * x.reduction_smooth;
+        let svx = fz * (c.pvx1 + c.pvx2 * dfz) * s.lvx * s.lmux * x.reduction_smooth;
+        let ex_a = (c.pex1 + c.pex2 * dfz + c.pex3 * dfz * dfz) * s.lex;
+
+        // Pure Fy; Mz's F'y needs it at γ = 0 as well (4.E32/4.E74).
+        let fy = fy_load(p, s, x, fz0p, dfz, dpi, gamma_s);
+        let fy_g0 = if gamma_s == 0.0 { fy } else { fy_load(p, s, x, fz0p, dfz, dpi, 0.0) };
+
+        // Combined slip.
+        let cb = &p.combined;
+        let mut exa = cb.rex1 + cb.rex2 * dfz;
+        let mut eyk = cb.rey1 + cb.rey2 * dfz;
+        if mode.limits_check() {
+            exa = exa.min(1.0);
+            eyk = eyk.min(1.0);
+        }
+        let muy_out = if fz == 0.0 { 0.0 } else { fy.muy };
+
+        // Aligning moment.
+        let q = &p.aligning;
+        let fz_mz = if fz <= 0.0 {
+            0.0
+        } else if mode.limits_check() {
+            x.fz_low
+        } else {
+            fz
+        };
+        let kya_p = fy.kya + EPS * sgn1(fy.kya);
+        let shf = fy.shy + fy.svy / kya_p;
+        let sht = q.qhz1 + q.qhz2 * dfz + (q.qhz3 + q.qhz4 * dfz) * gamma_s;
+        // A58: camber enters Bt through γ (QBZ4·γ + QBZ5·|γ|), not γ*.
+        let bt = (q.qbz1 + q.qbz2 * dfz + q.qbz3 * dfz * dfz) * (1.0 + q.qbz4 * g + q.qbz5 * g.abs()) * s.lky / s.lmuy;
+        let ct = q.qcz1;
+        // A60: QDZ3·γ (signed), not QDZ3·|γ*| as in the book.
+        let dt = (q.qdz1 + q.qdz2 * dfz)
+            * (1.0 - pr.ppz1 * dpi)
+            * (1.0 + q.qdz3 * g + q.qdz4 * g * g)
+            * fz_mz
+            * (r0 / fz0p)
+            * s.ltr;
+        let br = q.qbz9 * s.lky / s.lmuy + q.qbz10 * fy.by * fy.cy;
+        let dr_a = fz_mz
+            * r0
+            * ((q.qdz6 + q.qdz7 * dfz) * s.lres
+                + ((q.qdz8 + q.qdz9 * dfz) * (1.0 + pr.ppz2 * dpi) + (q.qdz10 + q.qdz11 * dfz) * gamma_s.abs())
+                    * gamma_s
+                    * s.lkzc)
+            * s.lmuy;
+        // A56: the moment arm uses the unscaled Fz0.
+        let s_a = r0 * (q.ssz1 + (q.ssz3 + q.ssz4 * dfz) * g) * s.ls;
+        let s_fy = r0 * q.ssz2 / fz0 * s.ls;
+
+        // Overturning moment (TNO / Besselink form).
+        let qx = &p.overturning;
+        let mut fz_mx = fz;
+        let fzmin = p.limits.fzmin;
+        if fzmin > 0.0 && fz_mx < fzmin {
+            // Below FZMIN MFeval fades Mx out with (Fz/FZMIN)² rather than clamping.
+            fz_mx *= (fz_mx / fzmin) * (fz_mx / fzmin);
+        }
+        let fzr_mx = fz_mx / fz0;
+        let mx_fz_lmx = r0 * fz_mx * s.lmx;
+        let mx_const = mx_fz_lmx
+            * (qx.qsx1 * s.lvmx - qx.qsx2 * g * (1.0 + pr.ppmx1 * dpi) + qx.qsx10 * (qx.qsx11 * fzr_mx).fatan() * g)
+            - r0 * s.lmx * fz_mx * qx.qsx12 * g * g.abs();
+        let mx_q4 = qx.qsx4 * (qx.qsx5 * ((qx.qsx6 * fzr_mx) * (qx.qsx6 * fzr_mx)).fatan()).fcos();
+        let mx_fy_lin = r0 * s.lmx * (qx.qsx13 + qx.qsx14 * g.abs());
+
+        // Rolling resistance (A48); below FZMIN MFeval scales Fz by Fz/FZMIN.
+        let qy = &p.rolling;
+        let mut fz_my = x.u_fz;
+        if fzmin > 0.0 && fz_my < fzmin {
+            fz_my *= fz_my / fzmin;
+        }
+        let fzr_my = fz_my / fz0;
+        let my_scale = -r0 * fz0 * s.lmy * load_pressure_factor(fzr_my, x.press / nompres, qy.qsy7, qy.qsy8);
+        let my_gamma = (qy.qsy5 + qy.qsy6 * fzr_my) * g * g;
+
+        // Effective rolling radius (Besselink eq. 7) and deflection coefficients (eq. 4).
+        let v = &p.vertical;
+        let cz_p = v.vertical_stiffness * (1.0 + v.pfz1 * dpi);
+        let ufz_r = x.u_fz / fz0;
+        let deflection_term = (fz0 / cz_p) * (v.dreff * (v.breff * ufz_r).fatan() + v.freff * ufz_r);
+        let q_fz1 = ((v.vertical_stiffness * r0 / fz0).powi(2) - 4.0 * v.q_fz2).max(0.0).sqrt();
+        let ext_scale = (1.0 + v.pfz1 * dpi) * fz0;
+
+        // Contact patch (Besselink eqs. 9, 10); with bottoming the rim carries the rest.
+        let cp = &p.contact_patch;
+        let rim = p.dimension.rim_radius + v.bottom_offst;
+        let fz_cp = if r0 - x.u_fz / cz_p < rim { (r0 - rim) * cz_p } else { x.u_fz };
+        let n = (fz_cp / (cz_p * r0)).max(0.0);
+        let a_m = r0 * (cp.q_ra2 * n + cp.q_ra1 * n.sqrt());
+        let b_m = p.dimension.width * (cp.q_rb2 * n + cp.q_rb1 * n.cbrt());
+
+        // Carcass stiffnesses for the relaxation lengths (Besselink eqs. 17–19).
+        let st = &p.structural;
+        let cx_carcass =
+            st.longitudinal_stiffness * (1.0 + st.pcfx1 * dfz + st.pcfx2 * dfz * dfz) * (1.0 + st.pcfx3 * dpi);
+        let cy_carcass = st.lateral_stiffness * (1.0 + st.pcfy1 * dfz + st.pcfy2 * dfz * dfz) * (1.0 + st.pcfy3 * dpi);
+
+        LoadTerms {
+            key: load_key(x),
+            fz0,
+            gamma_s,
+            cx,
+            mux,
+            dx,
+            kxk,
+            bx,
+            shx,
+            svx,
+            ex_a,
+            pex4: c.pex4,
+            fy: FyLoad { muy: muy_out, ..fy },
+            fy_g0,
+            exa,
+            bxa_a: (cb.rbx1 + cb.rbx3 * gamma_s * gamma_s) * s.lxal,
+            shyk: cb.rhy1 + cb.rhy2 * dfz,
+            eyk,
+            byk_a: (cb.rby1 + cb.rby4 * gamma_s * gamma_s) * s.lyka,
+            dvyk_a: muy_out * fz * (cb.rvy1 + cb.rvy2 * dfz + cb.rvy3 * gamma_s) * s.lvyka * x.reduction_smooth,
+            kya_p,
+            shf,
+            sht,
+            bt,
+            ct,
+            dt,
+            et_a: q.qez1 + q.qez2 * dfz + q.qez3 * dfz * dfz,
+            et_b: q.qez4 + q.qez5 * gamma_s,
+            br,
+            dr_a,
+            s_a,
+            s_fy,
+            mx_fz_lmx,
+            mx_const,
+            mx_q4,
+            mx_fy_lin,
+            my_scale,
+            my_gamma,
+            deflection_term,
+            ext_scale,
+            q_fz1,
+            a_m,
+            b_m,
+            cx_carcass,
+            cy_carcass,
+        }
     }
 }
 
 /// Rolling resistance moment, Besselink 2010 eq. A48, with MFeval's low-speed shaping.
 #[inline(always)]
-fn my(p: &TyreParams, s: &ScalingFactors, x: &Prepared, input_kappa: f64, fx: f64) -> f64 {
-    let q = &p.rolling;
-    let vcx = x.vcx;
+fn my(p: &TyreParams, lt: &LoadTerms, vcx: f64, input_kappa: f64, fx: f64) -> f64 {
     if vcx == 0.0 {
         return 0.0;
     }
-    let r0 = p.dimension.unloaded_radius;
-    let fz0 = p.vertical.fnomin;
-    let v0 = p.model.longvl;
-    let mut fz = x.u_fz;
-    let fzmin = p.limits.fzmin;
-    if fzmin > 0.0 && fz < fzmin {
-        fz *= fz / fzmin;
-    }
-    let vr = vcx / v0;
+    let q = &p.rolling;
+    let vr = vcx / p.model.longvl;
     let vr2 = vr * vr;
-    let g2 = x.gamma * x.gamma;
-    let fz_r = fz / fz0;
-    let mut m = -r0
-        * fz0
-        * s.lmy
-        * (q.qsy1 + q.qsy2 * (fx / fz0) + q.qsy3 * vr.abs() + q.qsy4 * vr2 * vr2 + (q.qsy5 + q.qsy6 * fz_r) * g2)
-        * load_pressure_factor(fz_r, x.press / p.operating.nompres, q.qsy7, q.qsy8);
+    let mut m = lt.my_scale * (q.qsy1 + q.qsy2 * (fx / lt.fz0) + q.qsy3 * vr.abs() + q.qsy4 * vr2 * vr2 + lt.my_gamma);
     if vcx < 0.0 {
         m = -m;
     }
@@ -616,8 +729,7 @@ fn my(p: &TyreParams, s: &ScalingFactors, x: &Prepared, input_kappa: f64, fx: f6
     let high = vxlow / vcx.abs() - 1.0;
     let low = -1.0 - vxlow - high;
     if input_kappa >= low && input_kappa <= high {
-        let x0 = -1.0;
-        let red = (std::f64::consts::FRAC_PI_2 * (input_kappa - x0)) / (high - x0);
+        let red = (std::f64::consts::FRAC_PI_2 * (input_kappa + 1.0)) / (high + 1.0);
         m *= red.fsin();
     } else if input_kappa < low {
         m = -m;
@@ -625,124 +737,66 @@ fn my(p: &TyreParams, s: &ScalingFactors, x: &Prepared, input_kappa: f64, fx: f6
     m
 }
 
-/// Aligning-moment terms shared by pure and combined Mz.
-#[derive(Clone, Copy)]
-struct MzTerms {
-    alphar: f64,
-    alphat: f64,
-    bt: f64,
-    ct: f64,
-    dt: f64,
-    et: f64,
-    br: f64,
-    dr: f64,
-    kya_p: f64,
-}
-
-#[inline(always)]
-fn mz_terms(p: &TyreParams, s: &ScalingFactors, mode: UseMode, x: &Prepared, b: &Basic, f: &Fy0Terms) -> MzTerms {
-    let q = &p.aligning;
-    let pr = &p.pressure;
-    let r0 = p.dimension.unloaded_radius;
-    let (dfz, dpi, gs, as_) = (b.dfz, b.dpi, b.gamma_s, b.alpha_s);
-    let g = x.gamma;
-    let fz = if x.fz <= 0.0 {
-        0.0
-    } else if mode.limits_check() {
-        x.fz_low
-    } else {
-        x.fz
-    };
-    let kya_p = f.kya + EPS * sgn1(f.kya);
-    let shf = f.shy + f.svy / kya_p;
-    let alphar = as_ + shf;
-    let sht = q.qhz1 + q.qhz2 * dfz + (q.qhz3 + q.qhz4 * dfz) * gs;
-    let alphat = as_ + sht;
-    // A58: camber enters Bt through γ (QBZ4·γ + QBZ5·|γ|), not γ*.
-    let bt = (q.qbz1 + q.qbz2 * dfz + q.qbz3 * dfz * dfz) * (1.0 + q.qbz4 * g + q.qbz5 * g.abs()) * s.lky / s.lmuy;
-    let ct = q.qcz1;
-    // A60: QDZ3·γ (signed), not QDZ3·|γ*| as in the book.
-    let dt = (q.qdz1 + q.qdz2 * dfz)
-        * (1.0 - pr.ppz1 * dpi)
-        * (1.0 + q.qdz3 * g + q.qdz4 * g * g)
-        * fz
-        * (r0 / b.fz0p)
-        * s.ltr;
-    let mut et = (q.qez1 + q.qez2 * dfz + q.qez3 * dfz * dfz)
-        * (1.0 + (q.qez4 + q.qez5 * gs) * FRAC_2_PI * (bt * ct * alphat).fatan());
-    if mode.limits_check() && et > 1.0 {
-        et = 1.0;
-    }
-    let br = q.qbz9 * s.lky / s.lmuy + q.qbz10 * f.by * f.cy;
-    let dr = fz
-        * r0
-        * ((q.qdz6 + q.qdz7 * dfz) * s.lres
-            + ((q.qdz8 + q.qdz9 * dfz) * (1.0 + pr.ppz2 * dpi) + (q.qdz10 + q.qdz11 * dfz) * gs.abs()) * gs * s.lkzc)
-        * s.lmuy
-        * sgn(x.vcx)
-        * b.cos_alpha_s;
-    MzTerms { alphar, alphat, bt, ct, dt, et, br, dr, kya_p }
-}
-
 /// Effective rolling radius and spin rate (Besselink eqs. 1 and 7) → (Re, RΩ, Ω).
 #[inline(always)]
-fn rolling_radius(p: &TyreParams, x: &Prepared, b: &Basic, input: &MfInput) -> (f64, f64, f64) {
+fn rolling_radius(p: &TyreParams, lt: &LoadTerms, vcx: f64, input: &MfInput) -> (f64, f64, f64) {
     let v = &p.vertical;
     let r0 = p.dimension.unloaded_radius;
-    let v0 = p.model.longvl;
-    let fz0 = v.fnomin;
-    let cz = v.vertical_stiffness * (1.0 + v.pfz1 * b.dpi);
-    let fz_r = x.u_fz / fz0;
-    let deflection_term = (fz0 / cz) * (v.dreff * (v.breff * fz_r).fatan() + v.freff * fz_r);
-    let r_omega = |omega: f64| {
-        let w = omega * r0 / v0;
-        r0 * (v.q_re0 + v.q_v1 * w * w)
-    };
+    let k = v.q_v1 * (r0 / p.model.longvl).powi(2);
+    let a = r0 * v.q_re0 - lt.deflection_term;
     if input.omega_radps != 0.0 {
         let omega = input.omega_radps;
-        let ro = r_omega(omega);
-        return (ro - deflection_term, ro, omega);
+        let ro = r0 * (v.q_re0 + k * omega * omega);
+        return (ro - lt.deflection_term, ro, omega);
     }
-    // Ω is unknown: solve Ω = Vx(1 + κ)/Re(Ω) by fixed-point iteration (Re depends on Ω only
-    // through the small Q_V1 term, so this converges in a few steps).
-    let vx_wheel = x.vcx * (1.0 + input.kappa);
-    let mut re = r0 * v.q_re0 - deflection_term;
-    let mut omega = 0.0;
-    let mut ro = r0 * v.q_re0;
-    for _ in 0..30 {
-        if re <= 0.0 {
-            break;
-        }
-        omega = vx_wheel / re;
-        ro = r_omega(omega);
-        let next = ro - deflection_term;
-        let done = (next - re).abs() <= 1e-13 * r0;
-        re = next;
-        if done {
-            break;
+    // Ω is unknown: Re = A + R0·k·Ω² with Ω = Vw/Re, Vw = Vx(1 + κ), i.e. the cubic
+    // Re³ − A·Re² − R0·k·Vw² = 0. Start from the fixed-point step (Q_V1 is small, so that is
+    // already close) and polish with Newton, which converges quadratically.
+    let vw = vcx * (1.0 + input.kappa);
+    let c = r0 * k * vw * vw;
+    let mut re = a;
+    if re > 0.0 && c != 0.0 {
+        re = a + c / (a * a);
+        for _ in 0..3 {
+            let f = re * re * re - a * re * re - c;
+            let df = 3.0 * re * re - 2.0 * a * re;
+            if df == 0.0 {
+                break;
+            }
+            let step = f / df;
+            re -= step;
+            if step.abs() <= 1e-15 * re.abs() {
+                break;
+            }
         }
     }
-    (re, ro, omega)
+    let omega = if re > 0.0 { vw / re } else { 0.0 };
+    let ro = r0 * (v.q_re0 + k * omega * omega);
+    (ro - lt.deflection_term, ro, omega)
 }
 
 /// Deflection, loaded radius and vertical stiffness (Besselink eq. 4 solved for ρ).
 #[inline(always)]
-fn deflection(p: &TyreParams, x: &Prepared, b: &Basic, omega: f64, r_omega: f64, fx: f64, fy: f64) -> (f64, f64, f64) {
+fn deflection(
+    p: &TyreParams,
+    x: &Prepared,
+    lt: &LoadTerms,
+    omega: f64,
+    r_omega: f64,
+    fx: f64,
+    fy: f64,
+) -> (f64, f64, f64) {
     let v = &p.vertical;
     let r0 = p.dimension.unloaded_radius;
-    let fz0 = v.fnomin;
-    let cz0 = v.vertical_stiffness;
-    let q_fz1 = ((cz0 * r0 / fz0).powi(2) - 4.0 * v.q_fz2).max(0.0).sqrt();
-    let fcx = v.q_fcx * fx / fz0;
-    let fcy = v.q_fcy * fy / fz0;
-    let ext =
-        ((1.0 + v.q_v2 * (r0 / p.model.longvl) * omega.abs() - fcx * fcx - fcy * fcy) * (1.0 + v.pfz1 * b.dpi) * fz0)
-            .max(f64::MIN_POSITIVE);
+    let fcx = v.q_fcx * fx / lt.fz0;
+    let fcy = v.q_fcy * fy / lt.fz0;
+    let ext = ((1.0 + v.q_v2 * (r0 / p.model.longvl) * omega.abs() - fcx * fcx - fcy * fcy) * lt.ext_scale)
+        .max(f64::MIN_POSITIVE);
     let fz = x.fz_low;
     // Q_FZ2·x² + Q_FZ1·x = Fz/ext with x = ρ/R0; the root in cancellation-free form.
     let c = fz / ext;
-    let disc = (q_fz1 * q_fz1 + 4.0 * v.q_fz2 * c).max(0.0);
-    let denom = q_fz1 + disc.sqrt();
+    let disc = (lt.q_fz1 * lt.q_fz1 + 4.0 * v.q_fz2 * c).max(0.0);
+    let denom = lt.q_fz1 + disc.sqrt();
     let xr = if denom > 0.0 { 2.0 * c / denom } else { 0.0 };
     let mut rho = (xr * r0).max(0.0);
     let rl = (r_omega - rho).max(0.0);
@@ -752,90 +806,112 @@ fn deflection(p: &TyreParams, x: &Prepared, b: &Basic, omega: f64, r_omega: f64,
     (rho, rl, fz / rho)
 }
 
-/// Contact patch half length a and half width b (Besselink eqs. 9, 10).
+/// The slip-dependent part of the model for one point, given its load-case terms.
 #[inline(always)]
-fn contact_patch(p: &TyreParams, x: &Prepared, b: &Basic) -> (f64, f64) {
-    let v = &p.vertical;
-    let cp = &p.contact_patch;
-    let r0 = p.dimension.unloaded_radius;
-    let ncz = v.vertical_stiffness * (1.0 + v.pfz1 * b.dpi);
-    // With bottoming the rim carries the load beyond this deflection.
-    let room = r0 - p.dimension.rim_radius - v.bottom_offst;
-    let fz = if r0 - x.u_fz / ncz < p.dimension.rim_radius + v.bottom_offst { room * ncz } else { x.u_fz };
-    let n = (fz / (ncz * r0)).max(0.0);
-    let a = r0 * (cp.q_ra2 * n + cp.q_ra1 * n.sqrt());
-    let bw = p.dimension.width * (cp.q_rb2 * n + cp.q_rb1 * n.cbrt());
-    (a, bw)
-}
-
-/// Evaluates the model at one operating point with the file's own scaling factors.
-pub fn evaluate(params: &TyreParams, mode: UseMode, input: &MfInput) -> MfOutput {
-    evaluate_scaled(params, &params.scaling, mode, input)
-}
-
-/// Evaluates the model with `scaling` in place of `params.scaling`, so a simulation can vary
-/// grip and stiffness λs per step without copying the parameter set.
-pub fn evaluate_scaled(params: &TyreParams, scaling: &ScalingFactors, mode: UseMode, input: &MfInput) -> MfOutput {
-    let p = params;
-    let s = scaling;
-    let x = prepare(p, mode, input);
-    let b = basic(p, s, mode, &x);
-
-    let (fx0, mux, kxk) = fx0(p, s, mode, &x, &b);
-    let kya_full = kya(p, s, &b, x.fz, b.gamma_s);
-    let fy0 = fy0_with(p, s, mode, &x, &b, b.gamma_s, kya_full);
-    // Mz's pneumatic-trail term uses Fy0 at γ = 0 (4.E32/4.E74); reuse when γ* is 0 already.
-    let fy0_g0 = if b.gamma_s == 0.0 {
-        fy0.fy0
+fn eval_point(
+    p: &TyreParams,
+    s: &ScalingFactors,
+    mode: UseMode,
+    input: &MfInput,
+    x: &Prepared,
+    lt: &LoadTerms,
+) -> MfOutput {
+    let vcx = x.vcx;
+    let kappa = x.kappa;
+    // One sin/cos pair serves tan α (for V'c and α*) and cos α* (for Dr) in the TNO mode.
+    let (sin_alpha, cos_alpha) = sin_cos(x.alpha);
+    let tan_alpha = sin_alpha / cos_alpha;
+    let (alpha_s, cos_alpha_s) = if mode.alpha_star() {
+        let a = tan_alpha * sgn1(vcx);
+        (a, a.fcos())
     } else {
-        let k0 = kya(p, s, &b, x.fz, 0.0);
-        fy0_with(p, s, mode, &x, &b, 0.0, k0).fy0
+        (x.alpha, cos_alpha)
     };
-    let mzt = mz_terms(p, s, mode, &x, &b, &fy0);
+    // cos α' = Vcx/V'c (4.E6), V'c = |Vc| + ε.
+    let vsy = tan_alpha * vcx.abs();
+    let vc = (vcx * vcx + vsy * vsy).sqrt();
+    let cos_alpha_p = (vcx / (vc + EPS)).clamp(-1.0, 1.0);
+
+    // Pure Fx.
+    let kx = kappa + lt.shx;
+    let mut ex = lt.ex_a * (1.0 - lt.pex4 * sgn(kx));
+    if mode.limits_check() && ex > 1.0 {
+        ex = 1.0;
+    }
+    let mut fx0 = lt.dx * (lt.cx * mf_arg(lt.bx, kx, ex).fatan()).fsin() + lt.svx;
+    if vcx < 0.0 {
+        fx0 = -fx0;
+    }
+
+    // Pure Fy at γ* and, for the trail term, at γ = 0.
+    let fy0 = fy_kernel(&lt.fy, mode, alpha_s, vcx);
+    let fy0_g0 = if lt.gamma_s == 0.0 { fy0 } else { fy_kernel(&lt.fy_g0, mode, alpha_s, vcx) };
+
+    // Aligning-moment slip angles and curvature.
+    let alphar = alpha_s + lt.shf;
+    let alphat = alpha_s + lt.sht;
+    let mut et = lt.et_a * (1.0 + lt.et_b * FRAC_2_PI * (lt.bt * lt.ct * alphat).fatan());
+    if mode.limits_check() && et > 1.0 {
+        et = 1.0;
+    }
+    let dr = lt.dr_a * sgn(vcx) * cos_alpha_s;
 
     let (fx, fy, mz, trail, mzr) = if mode.combined() {
-        let gx = gxa(p, s, mode, &x, &b);
-        let (gy, svyk) = gyk(p, s, mode, &x, &b, fy0.muy);
+        let cb = &p.combined;
+        // Gxα = 1 exactly at α* = 0 (numerator and denominator coincide): skip the work.
+        let gx = if alpha_s == 0.0 {
+            1.0
+        } else {
+            let bxa = lt.bxa_a * cos_atan(cb.rbx2 * kappa);
+            let shxa = cb.rhx1;
+            let g0 = (cb.rcx1 * mf_arg(bxa, shxa, lt.exa).fatan()).fcos();
+            (cb.rcx1 * mf_arg(bxa, alpha_s + shxa, lt.exa).fatan()).fcos() / g0
+        };
+        // Likewise Gyκ = 1 and SVyκ = 0 at κ = 0.
+        let (gy, svyk) = if kappa == 0.0 {
+            (1.0, 0.0)
+        } else {
+            let byk = lt.byk_a * cos_atan(cb.rby2 * (alpha_s - cb.rby3));
+            let g0 = (cb.rcy1 * mf_arg(byk, lt.shyk, lt.eyk).fatan()).fcos();
+            let g = (cb.rcy1 * mf_arg(byk, kappa + lt.shyk, lt.eyk).fatan()).fcos() / g0;
+            let svyk = lt.dvyk_a * cos_atan(cb.rvy4 * alpha_s) * (cb.rvy5 * (cb.rvy6 * kappa).fatan()).fsin();
+            (g, svyk)
+        };
         let fx = gx * fx0;
-        let fy = gy * fy0.fy0 + svyk;
-        // A54/A55: equivalent slip angles combine α and κ through the slip stiffnesses.
-        let k_ratio = kxk / mzt.kya_p * x.kappa;
-        let k2 = k_ratio * k_ratio;
-        let tr = mzt.alphar.ftan();
-        let tt = mzt.alphat.ftan();
-        let alphar_eq = (tr * tr + k2).sqrt().fatan() * sgn(mzt.alphar);
-        let alphat_eq = (tt * tt + k2).sqrt().fatan() * sgn(mzt.alphat);
-        let q = &p.aligning;
-        let r0 = p.dimension.unloaded_radius;
-        // A56: s uses the unscaled Fz0.
-        let s_arm = r0 * (q.ssz1 + q.ssz2 * (fy / b.fz0) + (q.ssz3 + q.ssz4 * b.dfz) * x.gamma) * s.ls;
-        let mzr = mzt.dr * cos_atan(mzt.br * alphar_eq) * x.reduction_smooth;
-        let fy_p = gy * fy0_g0;
-        let t = mzt.dt
-            * (mzt.ct * mf_arg(mzt.bt, alphat_eq, mzt.et).fatan()).fcos()
-            * b.cos_alpha_p
-            * s.lfzo
-            * x.reduction_smooth;
-        let mz = -t * fy_p + mzr + s_arm * fx;
+        let fy = gy * fy0 + svyk;
+        // A54/A55: equivalent slip angles combine α and κ through the slip stiffnesses
+        // (identical to αr, αt when κ = 0).
+        let (alphar_eq, alphat_eq) = if kappa == 0.0 {
+            (alphar, alphat)
+        } else {
+            let k_ratio = lt.kxk / lt.kya_p * kappa;
+            let k2 = k_ratio * k_ratio;
+            let tr = alphar.ftan();
+            let tt = alphat.ftan();
+            ((tr * tr + k2).sqrt().fatan() * sgn(alphar), (tt * tt + k2).sqrt().fatan() * sgn(alphat))
+        };
+        let s_arm = lt.s_a + lt.s_fy * fy;
+        let mzr = dr * cos_atan(lt.br * alphar_eq) * x.reduction_smooth;
+        let t =
+            lt.dt * (lt.ct * mf_arg(lt.bt, alphat_eq, et).fatan()).fcos() * cos_alpha_p * s.lfzo * x.reduction_smooth;
+        let mz = -t * (gy * fy0_g0) + mzr + s_arm * fx;
         (fx, fy, mz, t, mzr)
     } else {
-        let t0 =
-            mzt.dt * (mzt.ct * mf_arg(mzt.bt, mzt.alphat, mzt.et).fatan()).fcos() * b.cos_alpha_p * x.reduction_smooth;
-        let mzr0 = mzt.dr * cos_atan(mzt.br * mzt.alphar) * b.cos_alpha_p * x.reduction_smooth;
-        let mz0 = -t0 * fy0_g0 + mzr0;
-        (fx0, fy0.fy0, mz0, t0, mzr0)
+        let t0 = lt.dt * (lt.ct * mf_arg(lt.bt, alphat, et).fatan()).fcos() * cos_alpha_p * x.reduction_smooth;
+        let mzr0 = dr * cos_atan(lt.br * alphar) * cos_alpha_p * x.reduction_smooth;
+        (fx0, fy0, -t0 * fy0_g0 + mzr0, t0, mzr0)
     };
 
-    let mx_nm = mx(p, s, &x, &b, fy);
-    let my_nm = my(p, s, &x, input.kappa, fx);
+    let qx = &p.overturning;
+    let fy_r = fy / lt.fz0;
+    let g = x.gamma;
+    let mx_nm = lt.mx_const
+        + lt.mx_fz_lmx * (qx.qsx3 * fy_r + lt.mx_q4 * (qx.qsx7 * g + qx.qsx8 * (qx.qsx9 * fy_r).fatan()).fsin())
+        + lt.mx_fy_lin * fy;
+    let my_nm = my(p, lt, vcx, input.kappa, fx);
 
-    let (re, r_omega, omega) = rolling_radius(p, &x, &b, input);
-    let (rho, rl, cz) = deflection(p, &x, &b, omega, r_omega, fx, fy);
-    let (a, bw) = contact_patch(p, &x, &b);
-
-    let st = &p.structural;
-    let cx = st.longitudinal_stiffness * (1.0 + st.pcfx1 * b.dfz + st.pcfx2 * b.dfz * b.dfz) * (1.0 + st.pcfx3 * b.dpi);
-    let cy = st.lateral_stiffness * (1.0 + st.pcfy1 * b.dfz + st.pcfy2 * b.dfz * b.dfz) * (1.0 + st.pcfy3 * b.dpi);
+    let (re, r_omega, omega) = rolling_radius(p, lt, vcx, input);
+    let (rho, rl, cz) = deflection(p, x, lt, omega, r_omega, fx, fy);
 
     MfOutput {
         fx_n: fx,
@@ -852,22 +928,62 @@ pub fn evaluate_scaled(params: &TyreParams, scaling: &ScalingFactors, mode: UseM
         p_pa: x.press,
         re_m: re,
         rho_m: rho,
-        contact_length_m: 2.0 * a,
+        contact_length_m: 2.0 * lt.a_m,
         trail_m: trail,
-        mux,
-        muy: fy0.muy,
+        mux: lt.mux,
+        muy: lt.fy.muy,
         omega_radps: omega,
         rl_m: rl,
-        contact_width_m: 2.0 * bw,
+        contact_width_m: 2.0 * lt.b_m,
         mzr_nm: mzr,
-        cx_npm: cx,
-        cy_npm: cy,
+        cx_npm: lt.cx_carcass,
+        cy_npm: lt.cy_carcass,
         cz_npm: cz,
-        kya_nprad: fy0.kya,
-        sigmax_m: (kxk / cx).abs(),
-        sigmay_m: (fy0.kya / cy).abs(),
-        kxk_n: kxk,
+        kya_nprad: lt.fy.kya,
+        sigmax_m: (lt.kxk / lt.cx_carcass).abs(),
+        sigmay_m: (lt.fy.kya / lt.cy_carcass).abs(),
+        kxk_n: lt.kxk,
         clamped: x.clamped,
+    }
+}
+
+/// Evaluates the model at one operating point with the file's own scaling factors.
+pub fn evaluate(params: &TyreParams, mode: UseMode, input: &MfInput) -> MfOutput {
+    evaluate_scaled(params, &params.scaling, mode, input)
+}
+
+/// Evaluates the model with `scaling` in place of `params.scaling`, so a simulation can vary
+/// grip and stiffness λs per step without copying the parameter set.
+pub fn evaluate_scaled(params: &TyreParams, scaling: &ScalingFactors, mode: UseMode, input: &MfInput) -> MfOutput {
+    let x = prepare(params, mode, input);
+    let lt = LoadTerms::new(params, scaling, mode, &x);
+    eval_point(params, scaling, mode, input, &x, &lt)
+}
+
+/// Evaluates a sequence of points, recomputing the load-case terms only when Fz, pressure,
+/// camber or the low-speed factor change from one point to the next (as within a sweep).
+/// Results are identical to calling [`evaluate_scaled`] per point.
+pub(crate) struct SweepEvaluator<'a> {
+    params: &'a TyreParams,
+    scaling: &'a ScalingFactors,
+    mode: UseMode,
+    cache: Option<LoadTerms>,
+}
+
+impl<'a> SweepEvaluator<'a> {
+    pub(crate) fn new(params: &'a TyreParams, scaling: &'a ScalingFactors, mode: UseMode) -> Self {
+        Self { params, scaling, mode, cache: None }
+    }
+
+    #[inline(always)]
+    pub(crate) fn eval(&mut self, input: &MfInput) -> MfOutput {
+        let x = prepare(self.params, self.mode, input);
+        let key = load_key(&x);
+        let lt = match self.cache {
+            Some(ref lt) if lt.key == key => lt,
+            _ => self.cache.insert(LoadTerms::new(self.params, self.scaling, self.mode, &x)),
+        };
+        eval_point(self.params, self.scaling, self.mode, input, &x, lt)
     }
 }
 
@@ -876,15 +992,16 @@ pub fn evaluate_scaled(params: &TyreParams, scaling: &ScalingFactors, mode: UseM
 pub fn pure_fy(params: &TyreParams, mode: UseMode, input: &MfInput) -> f64 {
     let s = &params.scaling;
     let x = prepare(params, mode, input);
-    let b = basic(params, s, mode, &x);
-    let k = kya(params, s, &b, x.fz, b.gamma_s);
-    fy0_with(params, s, mode, &x, &b, b.gamma_s, k).fy0
+    let fz0p = params.vertical.fnomin * s.lfzo;
+    let dfz = (x.fz - fz0p) / fz0p;
+    let dpi = (x.press - params.operating.nompres) / params.operating.nompres;
+    let (alpha_s, gamma_s) =
+        if mode.alpha_star() { (x.alpha.ftan() * sgn1(x.vcx), x.gamma.fsin()) } else { (x.alpha, x.gamma) };
+    let f = fy_load(params, s, &x, fz0p, dfz, dpi, gamma_s);
+    fy_kernel(&f, mode, alpha_s, x.vcx)
 }
 
 /// Pure longitudinal force Fx0 only.
 pub fn pure_fx(params: &TyreParams, mode: UseMode, input: &MfInput) -> f64 {
-    let s = &params.scaling;
-    let x = prepare(params, mode, input);
-    let b = basic(params, s, mode, &x);
-    fx0(params, s, mode, &x, &b).0
+    evaluate_scaled(params, &params.scaling, mode.pure(), input).fx_n
 }
