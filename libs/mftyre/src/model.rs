@@ -383,6 +383,59 @@ fn prepare(p: &TyreParams, mode: UseMode, input: &MfInput) -> Prepared {
     Prepared { fz, fz_low, u_fz, kappa, kappa_out, alpha, gamma, vcx, press, reduction_smooth, clamped }
 }
 
+/// Pure longitudinal force terms that depend on the load case only (4.E10–4.E18).
+#[derive(Clone, Copy, Default)]
+struct FxLoad {
+    cx: f64,
+    mux: f64,
+    dx: f64,
+    kxk: f64,
+    bx: f64,
+    shx: f64,
+    svx: f64,
+    /// Ex = ex_a·(1 − pex4·sgn κx).
+    ex_a: f64,
+    pex4: f64,
+}
+
+#[inline(always)]
+fn fx_load(p: &TyreParams, s: &ScalingFactors, x: &Prepared, dfz: f64, dpi: f64) -> FxLoad {
+    let c = &p.pure_fx;
+    let pr = &p.pressure;
+    let (fz, g) = (x.fz, x.gamma);
+    let cx = c.pcx1 * s.lcx;
+    let mut mux =
+        (c.pdx1 + c.pdx2 * dfz) * (1.0 + pr.ppx3 * dpi + pr.ppx4 * dpi * dpi) * (1.0 - c.pdx3 * g * g) * s.lmux;
+    if fz == 0.0 {
+        mux = 0.0;
+    }
+    let dx = mux * fz;
+    let kxk = fz * (c.pkx1 + c.pkx2 * dfz) * (c.pkx3 * dfz).exp() * (1.0 + pr.ppx1 * dpi + pr.ppx2 * dpi * dpi) * s.lkx;
+    FxLoad {
+        cx,
+        mux,
+        dx,
+        kxk,
+        bx: kxk / (cx * dx + EPS * sgn1(dx)),
+        shx: (c.phx1 + c.phx2 * dfz) * s.lhx * x.reduction_smooth,
+        svx: fz * (c.pvx1 + c.pvx2 * dfz) * s.lvx * s.lmux * x.reduction_smooth,
+        ex_a: (c.pex1 + c.pex2 * dfz + c.pex3 * dfz * dfz) * s.lex,
+        pex4: c.pex4,
+    }
+}
+
+/// Pure longitudinal force (4.E9) at slip κ from its load-case terms.
+#[inline(always)]
+fn fx_kernel(f: &FxLoad, mode: UseMode, kappa: f64, vcx: f64) -> f64 {
+    let kx = kappa + f.shx;
+    let mut ex = f.ex_a * (1.0 - f.pex4 * sgn(kx));
+    if mode.limits_check() && ex > 1.0 {
+        ex = 1.0;
+    }
+    let fx0 = f.dx * (f.cx * mf_arg(f.bx, kx, ex).fatan()).fsin() + f.svx;
+    if vcx < 0.0 { -fx0 } else { fx0 }
+}
+
 /// Pure lateral force terms that depend on the load case only (4.E20–4.E30).
 #[derive(Clone, Copy, Default)]
 struct FyLoad {
@@ -409,15 +462,7 @@ struct LoadTerms {
     fz0: f64,
     gamma_s: f64,
     // Pure Fx (4.E9–4.E18).
-    cx: f64,
-    mux: f64,
-    dx: f64,
-    kxk: f64,
-    bx: f64,
-    shx: f64,
-    svx: f64,
-    ex_a: f64,
-    pex4: f64,
+    fx: FxLoad,
     // Pure Fy at γ* and at γ = 0 (the latter for Mz's F'y).
     fy: FyLoad,
     fy_g0: FyLoad,
@@ -548,21 +593,8 @@ impl LoadTerms {
         let r0 = p.dimension.unloaded_radius;
 
         // Pure Fx.
-        let c = &p.pure_fx;
+        let fxl = fx_load(p, s, x, dfz, dpi);
         let pr = &p.pressure;
-        let cx = c.pcx1 * s.lcx;
-        let mut mux =
-            (c.pdx1 + c.pdx2 * dfz) * (1.0 + pr.ppx3 * dpi + pr.ppx4 * dpi * dpi) * (1.0 - c.pdx3 * g * g) * s.lmux;
-        if fz == 0.0 {
-            mux = 0.0;
-        }
-        let dx = mux * fz;
-        let kxk =
-            fz * (c.pkx1 + c.pkx2 * dfz) * (c.pkx3 * dfz).exp() * (1.0 + pr.ppx1 * dpi + pr.ppx2 * dpi * dpi) * s.lkx;
-        let bx = kxk / (cx * dx + EPS * sgn1(dx));
-        let shx = (c.phx1 + c.phx2 * dfz) * s.lhx * x.reduction_smooth;
-        let svx = fz * (c.pvx1 + c.pvx2 * dfz) * s.lvx * s.lmux * x.reduction_smooth;
-        let ex_a = (c.pex1 + c.pex2 * dfz + c.pex3 * dfz * dfz) * s.lex;
 
         // Pure Fy; Mz's F'y needs it at γ = 0 as well (4.E32/4.E74).
         let fy = fy_load(p, s, x, fz0p, dfz, dpi, gamma_s);
@@ -664,15 +696,7 @@ impl LoadTerms {
             key: load_key(x),
             fz0,
             gamma_s,
-            cx,
-            mux,
-            dx,
-            kxk,
-            bx,
-            shx,
-            svx,
-            ex_a,
-            pex4: c.pex4,
+            fx: fxl,
             fy: FyLoad { muy: muy_out, ..fy },
             fy_g0,
             exa,
@@ -832,16 +856,7 @@ fn eval_point(
     let vc = (vcx * vcx + vsy * vsy).sqrt();
     let cos_alpha_p = (vcx / (vc + EPS)).clamp(-1.0, 1.0);
 
-    // Pure Fx.
-    let kx = kappa + lt.shx;
-    let mut ex = lt.ex_a * (1.0 - lt.pex4 * sgn(kx));
-    if mode.limits_check() && ex > 1.0 {
-        ex = 1.0;
-    }
-    let mut fx0 = lt.dx * (lt.cx * mf_arg(lt.bx, kx, ex).fatan()).fsin() + lt.svx;
-    if vcx < 0.0 {
-        fx0 = -fx0;
-    }
+    let fx0 = fx_kernel(&lt.fx, mode, kappa, vcx);
 
     // Pure Fy at γ* and, for the trail term, at γ = 0.
     let fy0 = fy_kernel(&lt.fy, mode, alpha_s, vcx);
@@ -884,7 +899,7 @@ fn eval_point(
         let (alphar_eq, alphat_eq) = if kappa == 0.0 {
             (alphar, alphat)
         } else {
-            let k_ratio = lt.kxk / lt.kya_p * kappa;
+            let k_ratio = lt.fx.kxk / lt.kya_p * kappa;
             let k2 = k_ratio * k_ratio;
             let tr = alphar.ftan();
             let tt = alphat.ftan();
@@ -930,7 +945,7 @@ fn eval_point(
         rho_m: rho,
         contact_length_m: 2.0 * lt.a_m,
         trail_m: trail,
-        mux: lt.mux,
+        mux: lt.fx.mux,
         muy: lt.fy.muy,
         omega_radps: omega,
         rl_m: rl,
@@ -940,9 +955,9 @@ fn eval_point(
         cy_npm: lt.cy_carcass,
         cz_npm: cz,
         kya_nprad: lt.fy.kya,
-        sigmax_m: (lt.kxk / lt.cx_carcass).abs(),
+        sigmax_m: (lt.fx.kxk / lt.cx_carcass).abs(),
         sigmay_m: (lt.fy.kya / lt.cy_carcass).abs(),
-        kxk_n: lt.kxk,
+        kxk_n: lt.fx.kxk,
         clamped: x.clamped,
     }
 }
@@ -1003,5 +1018,10 @@ pub fn pure_fy(params: &TyreParams, mode: UseMode, input: &MfInput) -> f64 {
 
 /// Pure longitudinal force Fx0 only.
 pub fn pure_fx(params: &TyreParams, mode: UseMode, input: &MfInput) -> f64 {
-    evaluate_scaled(params, &params.scaling, mode.pure(), input).fx_n
+    let s = &params.scaling;
+    let x = prepare(params, mode, input);
+    let fz0p = params.vertical.fnomin * s.lfzo;
+    let dfz = (x.fz - fz0p) / fz0p;
+    let dpi = (x.press - params.operating.nompres) / params.operating.nompres;
+    fx_kernel(&fx_load(params, s, &x, dfz, dpi), mode, x.kappa, x.vcx)
 }

@@ -85,6 +85,13 @@ proptest! {
     #![proptest_config(ProptestConfig::with_cases(4000))]
 
     #[test]
+    fn pure_entry_points_equal_the_full_evaluation(x in valid_input(), mode in modes()) {
+        let full = evaluate(params(), mode.pure(), &x);
+        prop_assert_eq!(mftyre::pure_fx(params(), mode, &x).to_bits(), full.fx_n.to_bits());
+        prop_assert_eq!(mftyre::pure_fy(params(), mode, &x).to_bits(), full.fy_n.to_bits());
+    }
+
+    #[test]
     fn outputs_are_finite_over_the_valid_box(x in valid_input(), mode in modes()) {
         let o = evaluate(params(), mode, &x);
         prop_assert!(all_finite(&o), "{x:?} {mode}: {o:?}");
