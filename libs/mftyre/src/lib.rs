@@ -12,7 +12,6 @@
 //! (the output flags [`Clamped::PHIT_IGNORED`]), and turn-slip use modes are rejected.
 
 mod batch;
-mod fastmath;
 mod model;
 mod params;
 mod tir;

@@ -9,7 +9,6 @@
 
 use std::f64::consts::{FRAC_2_PI, PI};
 
-use crate::fastmath::{Fast, sin_cos};
 use crate::params::{ScalingFactors, TyreParams};
 
 /// Small number that keeps divisions finite (4.E6a); signed like the quantity it protects.
@@ -283,7 +282,7 @@ fn cos_atan(x: f64) -> f64 {
 #[inline(always)]
 fn mf_arg(b: f64, x: f64, e: f64) -> f64 {
     let bx = b * x;
-    bx - e * (bx - bx.fatan())
+    bx - e * (bx - bx.atan())
 }
 
 /// Operating point after limit checks and low-speed handling.
@@ -349,13 +348,13 @@ fn prepare(p: &TyreParams, mode: UseMode, input: &MfInput) -> Prepared {
                 let ratio = vcx / vxlow;
                 // Shifts fade in with a cosine ramp and slip with a linear one, so forces go
                 // smoothly to zero at standstill instead of through the 0/0 of slip.
-                reduction_smooth = 1.0 - 0.5 * (1.0 + (PI * ratio).fcos());
+                reduction_smooth = 1.0 - 0.5 * (1.0 + (PI * ratio).cos());
                 kappa *= ratio.abs();
                 kappa_out *= ratio.abs();
             }
             // The side-slip speed only matters when the forward speed is already below VXLOW.
             if vcx.abs() < vxlow {
-                let speed_sum = vcx.abs() + (alpha.ftan() * vcx).abs();
+                let speed_sum = vcx.abs() + (alpha.tan() * vcx).abs();
                 if speed_sum < vxlow {
                     alpha *= speed_sum / vxlow;
                 }
@@ -432,7 +431,7 @@ fn fx_kernel(f: &FxLoad, mode: UseMode, kappa: f64, vcx: f64) -> f64 {
     if mode.limits_check() && ex > 1.0 {
         ex = 1.0;
     }
-    let fx0 = f.dx * (f.cx * mf_arg(f.bx, kx, ex).fatan()).fsin() + f.svx;
+    let fx0 = f.dx * (f.cx * mf_arg(f.bx, kx, ex).atan()).sin() + f.svx;
     if vcx < 0.0 { -fx0 } else { fx0 }
 }
 
@@ -524,7 +523,7 @@ fn kya(p: &TyreParams, s: &ScalingFactors, fz0p: f64, dpi: f64, fz: f64, gamma_s
         * fz0p
         * (1.0 + pr.ppy1 * dpi)
         * (1.0 - c.pky3 * gamma_s.abs())
-        * (c.pky4 * ((fz / fz0p) / ((c.pky2 + c.pky5 * gamma_s * gamma_s) * (1.0 + pr.ppy2 * dpi))).fatan()).fsin()
+        * (c.pky4 * ((fz / fz0p) / ((c.pky2 + c.pky5 * gamma_s * gamma_s) * (1.0 + pr.ppy2 * dpi))).atan()).sin()
         * s.lky
 }
 
@@ -569,7 +568,7 @@ fn fy_kernel(f: &FyLoad, mode: UseMode, alpha_s: f64, vcx: f64) -> f64 {
     if mode.limits_check() && ey > 1.0 {
         ey = 1.0;
     }
-    let fy0 = f.dy * (f.cy * mf_arg(f.by, alphay, ey).fatan()).fsin() + f.svy;
+    let fy0 = f.dy * (f.cy * mf_arg(f.by, alphay, ey).atan()).sin() + f.svy;
     if mode.alpha_star() && vcx < 0.0 { -fy0 } else { fy0 }
 }
 
@@ -588,7 +587,7 @@ impl LoadTerms {
         let dfz = (fz - fz0p) / fz0p;
         let nompres = p.operating.nompres;
         let dpi = (x.press - nompres) / nompres;
-        let gamma_s = if mode.alpha_star() { x.gamma.fsin() } else { x.gamma };
+        let gamma_s = if mode.alpha_star() { x.gamma.sin() } else { x.gamma };
         let g = x.gamma;
         let r0 = p.dimension.unloaded_radius;
 
@@ -655,9 +654,9 @@ impl LoadTerms {
         let fzr_mx = fz_mx / fz0;
         let mx_fz_lmx = r0 * fz_mx * s.lmx;
         let mx_const = mx_fz_lmx
-            * (qx.qsx1 * s.lvmx - qx.qsx2 * g * (1.0 + pr.ppmx1 * dpi) + qx.qsx10 * (qx.qsx11 * fzr_mx).fatan() * g)
+            * (qx.qsx1 * s.lvmx - qx.qsx2 * g * (1.0 + pr.ppmx1 * dpi) + qx.qsx10 * (qx.qsx11 * fzr_mx).atan() * g)
             - r0 * s.lmx * fz_mx * qx.qsx12 * g * g.abs();
-        let mx_q4 = qx.qsx4 * (qx.qsx5 * ((qx.qsx6 * fzr_mx) * (qx.qsx6 * fzr_mx)).fatan()).fcos();
+        let mx_q4 = qx.qsx4 * (qx.qsx5 * ((qx.qsx6 * fzr_mx) * (qx.qsx6 * fzr_mx)).atan()).cos();
         let mx_fy_lin = r0 * s.lmx * (qx.qsx13 + qx.qsx14 * g.abs());
 
         // Rolling resistance (A48); below FZMIN MFeval scales Fz by Fz/FZMIN.
@@ -674,7 +673,7 @@ impl LoadTerms {
         let v = &p.vertical;
         let cz_p = v.vertical_stiffness * (1.0 + v.pfz1 * dpi);
         let ufz_r = x.u_fz / fz0;
-        let deflection_term = (fz0 / cz_p) * (v.dreff * (v.breff * ufz_r).fatan() + v.freff * ufz_r);
+        let deflection_term = (fz0 / cz_p) * (v.dreff * (v.breff * ufz_r).atan() + v.freff * ufz_r);
         let q_fz1 = ((v.vertical_stiffness * r0 / fz0).powi(2) - 4.0 * v.q_fz2).max(0.0).sqrt();
         let ext_scale = (1.0 + v.pfz1 * dpi) * fz0;
 
@@ -754,7 +753,7 @@ fn my(p: &TyreParams, lt: &LoadTerms, vcx: f64, input_kappa: f64, fx: f64) -> f6
     let low = -1.0 - vxlow - high;
     if input_kappa >= low && input_kappa <= high {
         let red = (std::f64::consts::FRAC_PI_2 * (input_kappa + 1.0)) / (high + 1.0);
-        m *= red.fsin();
+        m *= red.sin();
     } else if input_kappa < low {
         m = -m;
     }
@@ -843,11 +842,11 @@ fn eval_point(
     let vcx = x.vcx;
     let kappa = x.kappa;
     // One sin/cos pair serves tan α (for V'c and α*) and cos α* (for Dr) in the TNO mode.
-    let (sin_alpha, cos_alpha) = sin_cos(x.alpha);
+    let (sin_alpha, cos_alpha) = x.alpha.sin_cos();
     let tan_alpha = sin_alpha / cos_alpha;
     let (alpha_s, cos_alpha_s) = if mode.alpha_star() {
         let a = tan_alpha * sgn1(vcx);
-        (a, a.fcos())
+        (a, a.cos())
     } else {
         (x.alpha, cos_alpha)
     };
@@ -865,7 +864,7 @@ fn eval_point(
     // Aligning-moment slip angles and curvature.
     let alphar = alpha_s + lt.shf;
     let alphat = alpha_s + lt.sht;
-    let mut et = lt.et_a * (1.0 + lt.et_b * FRAC_2_PI * (lt.bt * lt.ct * alphat).fatan());
+    let mut et = lt.et_a * (1.0 + lt.et_b * FRAC_2_PI * (lt.bt * lt.ct * alphat).atan());
     if mode.limits_check() && et > 1.0 {
         et = 1.0;
     }
@@ -879,17 +878,17 @@ fn eval_point(
         } else {
             let bxa = lt.bxa_a * cos_atan(cb.rbx2 * kappa);
             let shxa = cb.rhx1;
-            let g0 = (cb.rcx1 * mf_arg(bxa, shxa, lt.exa).fatan()).fcos();
-            (cb.rcx1 * mf_arg(bxa, alpha_s + shxa, lt.exa).fatan()).fcos() / g0
+            let g0 = (cb.rcx1 * mf_arg(bxa, shxa, lt.exa).atan()).cos();
+            (cb.rcx1 * mf_arg(bxa, alpha_s + shxa, lt.exa).atan()).cos() / g0
         };
         // Likewise Gyκ = 1 and SVyκ = 0 at κ = 0.
         let (gy, svyk) = if kappa == 0.0 {
             (1.0, 0.0)
         } else {
             let byk = lt.byk_a * cos_atan(cb.rby2 * (alpha_s - cb.rby3));
-            let g0 = (cb.rcy1 * mf_arg(byk, lt.shyk, lt.eyk).fatan()).fcos();
-            let g = (cb.rcy1 * mf_arg(byk, kappa + lt.shyk, lt.eyk).fatan()).fcos() / g0;
-            let svyk = lt.dvyk_a * cos_atan(cb.rvy4 * alpha_s) * (cb.rvy5 * (cb.rvy6 * kappa).fatan()).fsin();
+            let g0 = (cb.rcy1 * mf_arg(byk, lt.shyk, lt.eyk).atan()).cos();
+            let g = (cb.rcy1 * mf_arg(byk, kappa + lt.shyk, lt.eyk).atan()).cos() / g0;
+            let svyk = lt.dvyk_a * cos_atan(cb.rvy4 * alpha_s) * (cb.rvy5 * (cb.rvy6 * kappa).atan()).sin();
             (g, svyk)
         };
         let fx = gx * fx0;
@@ -901,18 +900,17 @@ fn eval_point(
         } else {
             let k_ratio = lt.fx.kxk / lt.kya_p * kappa;
             let k2 = k_ratio * k_ratio;
-            let tr = alphar.ftan();
-            let tt = alphat.ftan();
-            ((tr * tr + k2).sqrt().fatan() * sgn(alphar), (tt * tt + k2).sqrt().fatan() * sgn(alphat))
+            let tr = alphar.tan();
+            let tt = alphat.tan();
+            ((tr * tr + k2).sqrt().atan() * sgn(alphar), (tt * tt + k2).sqrt().atan() * sgn(alphat))
         };
         let s_arm = lt.s_a + lt.s_fy * fy;
         let mzr = dr * cos_atan(lt.br * alphar_eq) * x.reduction_smooth;
-        let t =
-            lt.dt * (lt.ct * mf_arg(lt.bt, alphat_eq, et).fatan()).fcos() * cos_alpha_p * s.lfzo * x.reduction_smooth;
+        let t = lt.dt * (lt.ct * mf_arg(lt.bt, alphat_eq, et).atan()).cos() * cos_alpha_p * s.lfzo * x.reduction_smooth;
         let mz = -t * (gy * fy0_g0) + mzr + s_arm * fx;
         (fx, fy, mz, t, mzr)
     } else {
-        let t0 = lt.dt * (lt.ct * mf_arg(lt.bt, alphat, et).fatan()).fcos() * cos_alpha_p * x.reduction_smooth;
+        let t0 = lt.dt * (lt.ct * mf_arg(lt.bt, alphat, et).atan()).cos() * cos_alpha_p * x.reduction_smooth;
         let mzr0 = dr * cos_atan(lt.br * alphar) * cos_alpha_p * x.reduction_smooth;
         (fx0, fy0, -t0 * fy0_g0 + mzr0, t0, mzr0)
     };
@@ -921,7 +919,7 @@ fn eval_point(
     let fy_r = fy / lt.fz0;
     let g = x.gamma;
     let mx_nm = lt.mx_const
-        + lt.mx_fz_lmx * (qx.qsx3 * fy_r + lt.mx_q4 * (qx.qsx7 * g + qx.qsx8 * (qx.qsx9 * fy_r).fatan()).fsin())
+        + lt.mx_fz_lmx * (qx.qsx3 * fy_r + lt.mx_q4 * (qx.qsx7 * g + qx.qsx8 * (qx.qsx9 * fy_r).atan()).sin())
         + lt.mx_fy_lin * fy;
     let my_nm = my(p, lt, vcx, input.kappa, fx);
 
@@ -1010,8 +1008,13 @@ pub fn pure_fy(params: &TyreParams, mode: UseMode, input: &MfInput) -> f64 {
     let fz0p = params.vertical.fnomin * s.lfzo;
     let dfz = (x.fz - fz0p) / fz0p;
     let dpi = (x.press - params.operating.nompres) / params.operating.nompres;
-    let (alpha_s, gamma_s) =
-        if mode.alpha_star() { (x.alpha.ftan() * sgn1(x.vcx), x.gamma.fsin()) } else { (x.alpha, x.gamma) };
+    let (alpha_s, gamma_s) = if mode.alpha_star() {
+        // tan α as sin/cos, exactly as the full evaluation forms it.
+        let (sin_alpha, cos_alpha) = x.alpha.sin_cos();
+        (sin_alpha / cos_alpha * sgn1(x.vcx), x.gamma.sin())
+    } else {
+        (x.alpha, x.gamma)
+    };
     let f = fy_load(params, s, &x, fz0p, dfz, dpi, gamma_s);
     fy_kernel(&f, mode, alpha_s, x.vcx)
 }
