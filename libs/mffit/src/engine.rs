@@ -1,0 +1,248 @@
+//! The least-squares problem every stage solves: "these `.tir` keys, this model channel, these
+//! points", on top of [`lsq`]'s bounded Levenberg–Marquardt.
+//!
+//! The Jacobian is numeric: central differences with steps scaled to each coefficient, its
+//! columns computed on all cores (each stage has 4–30 coefficients, each column a full pass
+//! over the points, so columns are the natural unit of parallel work). A test compares it with
+//! `lsq`'s own bounds-aware differences through [`lsq::check_jacobian`]. Analytic derivatives
+//! of the full MF 6.1 chain (limits, shifts, combined weighting, Mz's equivalent slips) would be
+//! a second model to keep in step with `mftyre`; numeric ones are exactly as correct as the
+//! model itself.
+
+use mftyre::{MfInput, TyreParams, UseMode};
+use nalgebra::{DMatrix, DVector};
+
+/// A model output a stage fits.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub enum Channel {
+    /// Pure lateral force Fy0 (cheap path, κ ignored).
+    Fy0,
+    /// Pure longitudinal force Fx0 (cheap path, α ignored).
+    Fx0,
+    /// Pure aligning moment Mz0 (full model, pure-slip mode).
+    Mz0,
+    /// Combined-slip Fx.
+    Fx,
+    /// Combined-slip Fy.
+    Fy,
+    /// Combined-slip Mz.
+    Mz,
+    /// Overturning moment Mx (full model with pure slip: free-rolling data).
+    Mx,
+    /// Loaded radius, m.
+    Rl,
+    /// Effective rolling radius, m.
+    Re,
+    /// Overall longitudinal carcass stiffness, N/m.
+    Cx,
+    /// Lateral relaxation length, m.
+    SigmaY,
+}
+
+impl Channel {
+    /// Name in reports.
+    pub fn name(self) -> &'static str {
+        match self {
+            Channel::Fy0 | Channel::Fy => "FY",
+            Channel::Fx0 | Channel::Fx => "FX",
+            Channel::Mz0 | Channel::Mz => "MZ",
+            Channel::Mx => "MX",
+            Channel::Rl => "RL",
+            Channel::Re => "RE",
+            Channel::Cx => "CX",
+            Channel::SigmaY => "SIGMAY",
+        }
+    }
+
+    /// Evaluates the channel of `params` at `input`. No limit checks: the data define the range.
+    pub fn eval(self, params: &TyreParams, input: &MfInput) -> f64 {
+        match self {
+            Channel::Fy0 => mftyre::pure_fy(params, UseMode::M211, input),
+            Channel::Fx0 => mftyre::pure_fx(params, UseMode::M211, input),
+            Channel::Mz0 => mftyre::evaluate(params, UseMode::M212, input).mz_nm,
+            Channel::Mx => mftyre::evaluate(params, UseMode::M212, input).mx_nm,
+            Channel::Fx => mftyre::evaluate(params, UseMode::M211, input).fx_n,
+            Channel::Fy => mftyre::evaluate(params, UseMode::M211, input).fy_n,
+            Channel::Mz => mftyre::evaluate(params, UseMode::M211, input).mz_nm,
+            Channel::Rl => mftyre::evaluate(params, UseMode::M211, input).rl_m,
+            Channel::Re => mftyre::evaluate(params, UseMode::M211, input).re_m,
+            Channel::Cx => mftyre::evaluate(params, UseMode::M211, input).cx_npm,
+            Channel::SigmaY => mftyre::evaluate(params, UseMode::M211, input).sigmay_m,
+        }
+    }
+}
+
+/// One data point: operating condition and measured value.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Point {
+    /// Model input.
+    pub input: MfInput,
+    /// Measured channel value.
+    pub measured: f64,
+}
+
+/// Fits `keys` of `base` to `points` of `channel`; residuals are `(model − measured)/scale`.
+#[derive(Debug)]
+pub struct ChannelProblem<'a> {
+    /// Parameter set holding every coefficient not being fitted.
+    pub base: &'a TyreParams,
+    /// `.tir` keys being fitted, in parameter-vector order.
+    pub keys: &'a [&'static str],
+    /// The data.
+    pub points: &'a [Point],
+    /// Model output fitted.
+    pub channel: Channel,
+    /// Residual scale (so robust-loss thresholds are in units of it), > 0.
+    pub scale: f64,
+    /// Relative central-difference step.
+    pub diff_step: f64,
+    /// Worker threads for residuals and Jacobian columns.
+    pub threads: usize,
+}
+
+impl<'a> ChannelProblem<'a> {
+    /// A problem with default differencing and all available cores.
+    pub fn new(
+        base: &'a TyreParams,
+        keys: &'a [&'static str],
+        points: &'a [Point],
+        channel: Channel,
+        scale: f64,
+    ) -> Self {
+        let threads = std::thread::available_parallelism().map(|n| n.get()).unwrap_or(1);
+        Self { base, keys, points, channel, scale, diff_step: f64::EPSILON.cbrt(), threads }
+    }
+
+    /// `base` with the parameter vector written into `keys`.
+    pub fn params_at(&self, p: &DVector<f64>) -> TyreParams {
+        let mut t = self.base.clone();
+        apply(&mut t, self.keys, p.as_slice());
+        t
+    }
+
+    fn residuals_into(&self, t: &TyreParams, out: &mut [f64]) {
+        let inv = 1.0 / self.scale;
+        for (o, pt) in out.iter_mut().zip(self.points) {
+            *o = (self.channel.eval(t, &pt.input) - pt.measured) * inv;
+        }
+    }
+
+    fn residuals_parallel(&self, t: &TyreParams, out: &mut [f64]) {
+        // Below a few hundred points a thread costs more than it saves.
+        if self.threads <= 1 || out.len() < 400 {
+            self.residuals_into(t, out);
+            return;
+        }
+        let chunk = out.len().div_ceil(self.threads);
+        std::thread::scope(|s| {
+            for (ci, o) in out.chunks_mut(chunk).enumerate() {
+                let pts = &self.points[ci * chunk..ci * chunk + o.len()];
+                s.spawn(move || {
+                    let inv = 1.0 / self.scale;
+                    for (o, pt) in o.iter_mut().zip(pts) {
+                        *o = (self.channel.eval(t, &pt.input) - pt.measured) * inv;
+                    }
+                });
+            }
+        });
+    }
+
+    fn step(&self, x: f64) -> f64 {
+        self.diff_step * x.abs().max(1e-3)
+    }
+}
+
+/// Writes `values` into `params` at `keys` (keys are `mftyre` typed coefficients, so `set` can
+/// only fail on non-finite values, which the solver never proposes; such a value is skipped).
+pub fn apply(params: &mut TyreParams, keys: &[&str], values: &[f64]) {
+    for (k, v) in keys.iter().zip(values) {
+        let _ = params.set(k, *v);
+    }
+}
+
+/// The current values of `keys` in `params` (0 for an unknown key).
+pub fn values_of(params: &TyreParams, keys: &[&str]) -> Vec<f64> {
+    keys.iter().map(|k| params.get(k).unwrap_or(0.0)).collect()
+}
+
+impl lsq::Problem for ChannelProblem<'_> {
+    fn num_residuals(&self) -> usize {
+        self.points.len()
+    }
+
+    fn residuals(&self, p: &DVector<f64>, r: &mut DVector<f64>) {
+        let t = self.params_at(p);
+        self.residuals_parallel(&t, r.as_mut_slice());
+    }
+
+    fn jacobian(&self, p: &DVector<f64>, j: &mut DMatrix<f64>) -> bool {
+        let n = p.len();
+        let m = self.points.len();
+        let threads = self.threads.max(1).min(n);
+        // Columns are contiguous in nalgebra's column-major storage: hand each worker its own.
+        let cols: Vec<&mut [f64]> = j.as_mut_slice().chunks_mut(m).collect();
+        let mut buckets: Vec<Vec<(usize, &mut [f64])>> = (0..threads).map(|_| Vec::new()).collect();
+        for (c, col) in cols.into_iter().enumerate() {
+            buckets[c % threads].push((c, col));
+        }
+        std::thread::scope(|s| {
+            for bucket in buckets {
+                s.spawn(move || {
+                    let mut plus = vec![0.0; m];
+                    let mut minus = vec![0.0; m];
+                    for (c, col) in bucket {
+                        let h = self.step(p[c]);
+                        let mut pp = p.clone();
+                        pp[c] = p[c] + h;
+                        self.residuals_into(&self.params_at(&pp), &mut plus);
+                        pp[c] = p[c] - h;
+                        self.residuals_into(&self.params_at(&pp), &mut minus);
+                        let inv = 1.0 / (2.0 * h);
+                        for i in 0..m {
+                            col[i] = (plus[i] - minus[i]) * inv;
+                        }
+                    }
+                });
+            }
+        });
+        true
+    }
+}
+
+/// Bounds for one coefficient, [lower, upper].
+pub type Bounds = (f64, f64);
+
+/// Physical bounds on a coefficient during fitting. They keep the fit out of the known bad
+/// regions (C ≤ 0, D ≤ 0, E > 1 at nominal conditions, radii and stiffnesses ≤ 0) without pinning
+/// anything a real tyre could need.
+pub fn bounds_for(key: &str) -> Bounds {
+    const INF: f64 = f64::INFINITY;
+    match key {
+        // Shape factors: C > 0; above 2.5 the curve oscillates.
+        "PCY1" | "PCX1" => (0.5, 2.5),
+        // Friction at nominal load: D > 0.
+        "PDY1" | "PDX1" => (0.1, 4.0),
+        // Curvature at nominal load: E ≤ 1.
+        "PEY1" | "PEX1" => (-10.0, 1.0),
+        "PEX4" => (-1.0, 1.0),
+        "PEY3" => (-1.0, 1.0),
+        // Combined weighting: B > 0, C > 0 (weights between 0 and 1).
+        "RBX1" | "RBY1" => (0.1, 100.0),
+        "RCX1" | "RCY1" => (0.2, 3.0),
+        "REX1" | "REY1" => (-10.0, 1.0),
+        // Trail and residual torque shape.
+        "QBZ1" => (0.5, 50.0),
+        "QCZ1" => (0.5, 3.0),
+        "QEZ1" => (-20.0, 1.0),
+        // Vertical and structural: positive stiffness and radius.
+        "VERTICAL_STIFFNESS" => (1.0e4, 5.0e6),
+        "UNLOADED_RADIUS" => (0.05, 2.0),
+        "LONGITUDINAL_STIFFNESS" | "LATERAL_STIFFNESS" => (1.0e3, 1.0e8),
+        "BREFF" => (0.1, 100.0),
+        "DREFF" => (0.0, 2.0),
+        "FREFF" => (-1.0, 1.0),
+        "Q_RE0" => (0.8, 1.2),
+        "Q_FZ2" => (0.0, 200.0),
+        _ => (-INF, INF),
+    }
+}
