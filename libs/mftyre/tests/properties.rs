@@ -328,3 +328,33 @@ fn batch_over_sweeps_equals_single_points_exactly() {
         }
     }
 }
+
+/// The low-speed model joins the normal one continuously at VXLOW and fades forces to zero at
+/// standstill.
+#[test]
+fn low_speed_model_is_continuous_and_fades_out() {
+    let p = params();
+    let vxlow = p.vxlow_mps();
+    let at = |vx: f64| {
+        evaluate(
+            p,
+            UseMode::M111,
+            &MfInput { fz_n: 6000.0, kappa: 0.05, alpha_rad: 0.05, gamma_rad: 0.02, vx_mps: vx, ..Default::default() },
+        )
+    };
+    let (below, above) = (at(vxlow * (1.0 - 1e-9)), at(vxlow * (1.0 + 1e-9)));
+    for (a, b) in
+        [(below.fx_n, above.fx_n), (below.fy_n, above.fy_n), (below.mz_nm, above.mz_nm), (below.my_nm, above.my_nm)]
+    {
+        assert!((a - b).abs() <= 1e-4 * (1.0 + b.abs()), "{a} vs {b}");
+    }
+    let stand = at(0.0);
+    assert!(stand.fx_n.abs() < 1e-6 && stand.mz_nm.abs() < 1e-6 && stand.my_nm == 0.0, "{stand:?}");
+    // No jumps on the way: 1 % speed steps change Fx by well under 5 % of its range.
+    let mut prev = at(0.0).fx_n;
+    for i in 1..=100 {
+        let fx = at(vxlow * i as f64 / 100.0).fx_n;
+        assert!(fx.is_finite() && (fx - prev).abs() < 0.05 * above.fx_n.abs(), "Fx jumps at step {i}: {prev} -> {fx}");
+        prev = fx;
+    }
+}
