@@ -4,9 +4,10 @@
 //!   by `.tir` key (`params.get("PKY1")`, `params.set("PKY1", v)`), read and written by
 //!   [`TyreParams::read_tir`], [`TyreParams::from_tir_str`] and [`TyreParams::to_tir_string`].
 //! * [`evaluate`] / [`evaluate_scaled`]: forces, moments, radii, stiffnesses and relaxation
-//!   lengths at one operating point, matching MFeval 4.3.1 (TNO-compatible choices) to
-//!   ~1e-12; [`evaluate_batch`] for struct-of-arrays batches; [`pure_fy`] for the cheapest
-//!   pure-cornering call.
+//!   lengths at one operating point, matching MFeval 4.3.1 (TNO-compatible choices) to better
+//!   than 1e-10 relative (≤ 2e-11 N, 1e-12 N·m absolute) on its reference tables;
+//!   [`evaluate_batch`] for struct-of-arrays batches (load-case terms shared along sweeps);
+//!   [`pure_fy`] / [`pure_fx`] for the cheapest pure-slip calls.
 //!
 //! Turn slip is not modelled: the model is evaluated with φt = 0 whatever the input says
 //! (the output flags [`Clamped::PHIT_IGNORED`]), and turn-slip use modes are rejected.
