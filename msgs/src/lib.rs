@@ -46,6 +46,7 @@ pub mod msgdef;
 pub mod rosgraph_msgs;
 pub mod schema;
 pub mod std_msgs;
+pub mod topics;
 
 pub use msg::*;
 

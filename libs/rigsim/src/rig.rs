@@ -786,9 +786,10 @@ impl VirtualRig {
         }
         if self.refused {
             fault |= RigSample::FAULT_ENVELOPE;
-        } else if mode == RigSetpoint::MODE_SAFE {
-            fault |= RigSample::FAULT_ESTOP;
         }
+        // FAULT_ESTOP means a hardware e-stop tripped (RigSample.msg). Being in the safe state
+        // (power-up, between procedures, after an abort) is not one; the virtual rig has no
+        // e-stop chain of its own, so it never raises the flag.
         let (fx, fy, mx, my, mz) =
             if m.valid { (m.fx_n, m.mf.fy_n, m.mf.mx_nm, m.mf.my_nm, m.mf.mz_nm) } else { (0.0, 0.0, 0.0, 0.0, 0.0) };
         let seq = self.seq;

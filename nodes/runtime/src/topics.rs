@@ -11,7 +11,7 @@ use ros2_client::{
 use std::time::Duration;
 use tyre_msgs::{
     LiveChannels, ProcedureCommand, ProcedureState, QualityReport, RigSample, RigSetpoint, RosMessage, SweepSummary,
-    ThermalState, diagnostic_msgs::DiagnosticArray, rosgraph_msgs::Clock,
+    ThermalState, diagnostic_msgs::DiagnosticArray, rosgraph_msgs::Clock, topics as names,
 };
 
 /// QoS presets. Names say what the topic is used for, not how DDS does it.
@@ -113,16 +113,16 @@ impl SuiteTopic {
     /// Name and QoS of the topic.
     pub const fn spec(self) -> TopicSpec {
         let (name, qos) = match self {
-            SuiteTopic::RigSample => ("sample", Qos::Stream),
-            SuiteTopic::RigSetpoint => ("setpoint", Qos::Stream),
-            SuiteTopic::ProcedureState => ("procedure/state", Qos::State),
-            SuiteTopic::ProcedureCommand => ("procedure/command", Qos::Command),
-            SuiteTopic::ThermalState => ("thermal/state", Qos::Stream),
-            SuiteTopic::LiveChannels => ("channels/live", Qos::Stream),
-            SuiteTopic::SweepSummary => ("channels/sweep_summary", Qos::Events),
-            SuiteTopic::QualityReport => ("quality/report", Qos::Events),
-            SuiteTopic::Diagnostics => ("/diagnostics", Qos::Diagnostics),
-            SuiteTopic::Clock => ("/clock", Qos::Clock),
+            SuiteTopic::RigSample => (names::RIG_SAMPLE, Qos::Stream),
+            SuiteTopic::RigSetpoint => (names::RIG_SETPOINT, Qos::Stream),
+            SuiteTopic::ProcedureState => (names::PROCEDURE_STATE, Qos::State),
+            SuiteTopic::ProcedureCommand => (names::PROCEDURE_COMMAND, Qos::Command),
+            SuiteTopic::ThermalState => (names::THERMAL_STATE, Qos::Stream),
+            SuiteTopic::LiveChannels => (names::CHANNELS_LIVE, Qos::Stream),
+            SuiteTopic::SweepSummary => (names::SWEEP_SUMMARY, Qos::Events),
+            SuiteTopic::QualityReport => (names::QUALITY_REPORT, Qos::Events),
+            SuiteTopic::Diagnostics => (names::DIAGNOSTICS, Qos::Diagnostics),
+            SuiteTopic::Clock => (names::CLOCK, Qos::Clock),
         };
         TopicSpec { name, qos }
     }

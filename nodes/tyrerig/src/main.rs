@@ -7,6 +7,7 @@
 use clap::{Parser, Subcommand};
 
 // --- subcommand modules (one per capability) ---
+mod cmd_run;
 mod cmd_model;
 mod cmd_launch;
 mod cmd_mcap;
@@ -23,6 +24,8 @@ struct Cli {
 #[derive(Debug, Subcommand)]
 enum Command {
     // --- subcommand variants ---
+    /// Run a procedure on the virtual rig, log it to MCAP and print the rig-time summary
+    Run(Box<cmd_run::RunArgs>),
     /// MF-Tyre 6.1 model: evaluate and plot
     #[command(subcommand)]
     Model(cmd_model::ModelCmd),
@@ -42,6 +45,7 @@ fn main() -> anyhow::Result<()> {
     node_runtime::logging::init();
     match cli.command {
         // --- subcommand dispatch ---
+        Command::Run(args) => cmd_run::run(*args),
         Command::Model(cmd) => cmd_model::run(cmd),
         Command::Launch(args) => cmd_launch::run_launch(args),
         Command::Node(args) => cmd_launch::run_single(args),

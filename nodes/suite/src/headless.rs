@@ -1,0 +1,277 @@
+//! The headless run: virtual rig, thermal gate and sequencer cores wired by function calls.
+//!
+//! Per rig sample (publish rate, 100 Hz by default): the gate judges the sample, the sequencer
+//! steps with the gate's state and the sample, and its setpoint goes to the rig, which integrates
+//! at its internal rate until the next sample. This is exactly the data flow of the DDS suite
+//! with zero transport delay, so the same procedure gives the same decisions in both.
+
+use crate::{
+    sink::{MessageSink, Outgoing},
+    spec::RunSpec,
+    summary::{RunSummary, SummaryBuilder},
+};
+use mcaplog::LogWriteError;
+use procedure::Plan;
+use rigsim::{RigConfig, TyreParams, VirtualRig};
+use sequencer::{Sequencer, SequencerConfig, SequencerEvent};
+use std::collections::BTreeMap;
+use thermal::{ThermalConfig, ThermalGate};
+use tyre_msgs::{ProcedureCommand, RigSample, builtin_interfaces::Time, std_msgs::Header};
+
+/// Why a headless run could not start or went wrong.
+#[derive(Debug, thiserror::Error)]
+pub enum HeadlessError {
+    #[error("virtual rig config: {0}")]
+    RigConfig(String),
+    #[error("{path}: {detail}")]
+    Tyre { path: String, detail: String },
+    #[error("procedure: {0}")]
+    Procedure(String),
+    #[error("thermal gate config: {0}")]
+    Thermal(String),
+    #[error("sequencer: {0}")]
+    Sequencer(String),
+    #[error("--effects: {0}")]
+    Effects(String),
+    #[error("log: {0}")]
+    Log(#[from] LogWriteError),
+    #[error("the procedure did not finish within {limit_s} s of rig time (at {at})")]
+    TooLong { limit_s: f64, at: String },
+}
+
+/// A ready-to-run headless suite.
+pub struct Headless {
+    rig: VirtualRig,
+    rig_cfg: RigConfig,
+    params: TyreParams,
+    gate: ThermalGate,
+    seq: Sequencer,
+    seed: u64,
+    /// Rig time and sample numbers carried over from earlier tyre specimens: a tyre change
+    /// mounts a fresh specimen on a fresh simulator, but the rig's clock runs on.
+    time_offset_s: f64,
+    seq_offset: u64,
+    max_rig_time_s: f64,
+    wear_true: Vec<f64>,
+}
+
+impl std::fmt::Debug for Headless {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("Headless").field("procedure", &self.seq.plan().procedure).finish()
+    }
+}
+
+/// Loads the rig config of `spec` with its overrides (tyre, effects, wear multiplier).
+pub fn rig_config(spec: &RunSpec) -> Result<(RigConfig, TyreParams), HeadlessError> {
+    let mut cfg = RigConfig::load(&spec.rig_config).map_err(|e| HeadlessError::RigConfig(e.to_string()))?;
+    if let Some(t) = &spec.tyre {
+        cfg.tyre_file = t.clone();
+    }
+    if let Some(e) = &spec.effects {
+        cfg.effects = rigsim::Effects::parse(e).map_err(|e| HeadlessError::Effects(e.to_string()))?;
+    }
+    if let Some(m) = spec.wear_multiplier {
+        cfg.wear.wear_mm_per_mj *= m;
+    }
+    let params = TyreParams::read_tir(&cfg.tyre_file)
+        .map_err(|e| HeadlessError::Tyre { path: cfg.tyre_file.display().to_string(), detail: e.to_string() })?;
+    Ok((cfg, params))
+}
+
+/// Loads and expands the procedure of `spec`.
+pub fn plan(spec: &RunSpec) -> Result<Plan, HeadlessError> {
+    let doc = procedure::load(&spec.procedure_file).map_err(|e| HeadlessError::Procedure(e.to_string()))?;
+    procedure::expand(&doc, &spec.inputs).map_err(|e| HeadlessError::Procedure(e.to_string()))
+}
+
+impl Headless {
+    /// Builds the cores for `spec`.
+    pub fn new(spec: &RunSpec, thermal_cfg: ThermalConfig, seq_cfg: SequencerConfig) -> Result<Self, HeadlessError> {
+        let (rig_cfg, params) = rig_config(spec)?;
+        let plan = plan(spec)?;
+        let rig = VirtualRig::new(rig_cfg.clone(), params.clone(), spec.seed)
+            .map_err(|e| HeadlessError::RigConfig(e.to_string()))?;
+        let gate = ThermalGate::new(thermal_cfg).map_err(|e| HeadlessError::Thermal(e.to_string()))?;
+        let seq = Sequencer::new(plan, seq_cfg).map_err(|e| HeadlessError::Sequencer(e.to_string()))?;
+        Ok(Self {
+            rig,
+            rig_cfg,
+            params,
+            gate,
+            seq,
+            seed: spec.seed,
+            time_offset_s: 0.0,
+            seq_offset: 0,
+            max_rig_time_s: spec.max_rig_time_s,
+            wear_true: Vec::new(),
+        })
+    }
+
+    /// The expanded plan.
+    pub fn plan(&self) -> &Plan {
+        self.seq.plan()
+    }
+
+    /// The metadata records a log of this run carries.
+    pub fn metadata(&self, spec: &RunSpec) -> BTreeMap<String, BTreeMap<String, String>> {
+        let mut md = BTreeMap::new();
+        let mut tyre = BTreeMap::new();
+        tyre.insert("file".to_owned(), self.rig_cfg.tyre_file.display().to_string());
+        tyre.insert("fnomin_n".to_owned(), format!("{}", self.params.fnomin_n()));
+        tyre.insert("unloaded_radius_m".to_owned(), format!("{}", self.params.unloaded_radius_m()));
+        tyre.insert("load_index".to_owned(), spec.inputs.load_index.to_string());
+        md.insert("tyre".to_owned(), tyre);
+        let mut proc_ = BTreeMap::new();
+        proc_.insert("name".to_owned(), self.seq.plan().procedure.clone());
+        proc_.insert("file".to_owned(), spec.procedure_file.display().to_string());
+        proc_.insert("fz0_n".to_owned(), format!("{}", self.seq.plan().fz0_n));
+        proc_.insert("pressures_bar".to_owned(), format!("{:?}", spec.inputs.pressures_bar));
+        proc_.insert("nominal_speed_mps".to_owned(), format!("{}", spec.inputs.nominal_speed_mps));
+        proc_.insert("sweeps".to_owned(), format!("{:?}", spec.inputs.sweeps).to_lowercase());
+        md.insert("procedure".to_owned(), proc_);
+        let mut rig = BTreeMap::new();
+        rig.insert("kind".to_owned(), "virtual".to_owned());
+        rig.insert("effects".to_owned(), self.rig_cfg.effects.to_string());
+        rig.insert("seed".to_owned(), self.seed.to_string());
+        rig.insert("publish_rate_hz".to_owned(), self.rig_cfg.publish_rate_hz.to_string());
+        md.insert("rig".to_owned(), rig);
+        let mut sw = BTreeMap::new();
+        sw.insert("software".to_owned(), "tyrerig".to_owned());
+        sw.insert("software_version".to_owned(), env!("CARGO_PKG_VERSION").to_owned());
+        sw.insert("mode".to_owned(), "headless".to_owned());
+        sw.insert("namespace".to_owned(), "/rig".to_owned());
+        sw.insert("log_time".to_owned(), "simulated rig time the message was produced at, ns".to_owned());
+        sw.insert("publish_time".to_owned(), "the message's header.stamp (rig time), ns".to_owned());
+        md.insert("tyrerig".to_owned(), sw);
+        md
+    }
+
+    fn retime(&self, mut s: RigSample) -> RigSample {
+        if self.time_offset_s > 0.0 {
+            s.runtime_s += self.time_offset_s;
+            let stamp = Time::from_secs_f64(s.runtime_s);
+            s.header = Header { stamp, frame_id: std::mem::take(&mut s.header.frame_id) };
+            s.seq += self.seq_offset;
+        }
+        s
+    }
+
+    /// Mounts a new specimen: a fresh tyre (new tread, not broken in, at room temperature).
+    fn mount_new_tyre(&mut self, last_seq: u64) -> Result<(), HeadlessError> {
+        self.wear_true.push(self.rig.truth().tread_worn_mm);
+        self.time_offset_s += self.rig.time_s();
+        self.seq_offset = last_seq + 1;
+        let seed = self.seed.wrapping_add(self.wear_true.len() as u64);
+        self.rig = VirtualRig::new(self.rig_cfg.clone(), self.params.clone(), seed)
+            .map_err(|e| HeadlessError::RigConfig(e.to_string()))?;
+        Ok(())
+    }
+
+    /// Runs the procedure to its end. `progress` receives the sequencer's progress (0..1).
+    pub fn run(
+        &mut self,
+        sink: &mut dyn MessageSink,
+        progress: &mut dyn FnMut(f64, f64),
+    ) -> Result<RunSummary, HeadlessError> {
+        let plan_name = self.seq.plan().procedure.clone();
+        let mut sum = SummaryBuilder::new(&plan_name);
+        let dt_sample = 1.0 / f64::from(self.rig_cfg.publish_rate_hz);
+        let start =
+            ProcedureCommand { command: ProcedureCommand::START, procedure: plan_name.clone(), ..Default::default() };
+        let out = self.seq.on_command(0.0, &start).map_err(|e| HeadlessError::Sequencer(e.to_string()))?;
+        let mut first_tyre_mounted = false;
+        for ev in &out.events {
+            sum.on_event(ev);
+            // A procedure that starts with mounting its first specimen: that tyre is the one on
+            // the rig already.
+            first_tyre_mounted |= matches!(ev, SequencerEvent::TyreChange { .. });
+        }
+        if let Some(sp) = &out.setpoint {
+            let _ = self.rig.apply_setpoint(sp);
+        }
+        let mut last_seq = 0;
+        let mut in_sweep = false;
+        loop {
+            let Some(local) = self.rig.step() else { continue };
+            let sample = self.retime(local);
+            let t = sample.runtime_s;
+            last_seq = sample.seq.max(last_seq);
+            sink.put(t, Outgoing::Sample(&sample))?;
+            sum.add_time(dt_sample);
+            if in_sweep {
+                sum.summary.max_temp_c = sum.summary.max_temp_c.max(sample.trdtempc_c);
+            }
+
+            self.gate.on_sample(t, &sample);
+            let th = self.gate.step(t);
+            sink.put(t, Outgoing::Thermal(&th.state))?;
+            for a in &th.alarms {
+                let level = match a.level {
+                    thermal::core::AlarmLevel::Warn => "WARN",
+                    thermal::core::AlarmLevel::Error => "ERROR",
+                };
+                sum.alarm(level, a.check.as_str(), a.message.clone(), a.rig_time_s);
+            }
+
+            let out = self.seq.step(t, Some(&th.state), Some(&sample));
+            if let Some(st) = &out.state {
+                self.gate.on_procedure_state(t, st);
+                sum.on_state(st);
+                progress(st.progress, t);
+                sink.put(t, Outgoing::Procedure(st))?;
+            }
+            let mut done = false;
+            for ev in &out.events {
+                sum.on_event(ev);
+                match ev {
+                    SequencerEvent::TyreChange { .. } => {
+                        // The thesis counts the first mounting too; only later ones need a new tyre.
+                        if first_tyre_mounted {
+                            self.mount_new_tyre(last_seq)?;
+                        }
+                        first_tyre_mounted = true;
+                    }
+                    SequencerEvent::SweepStarted { .. } => {
+                        in_sweep = true;
+                        sum.summary.max_sweep_start_temp_c = sum.summary.max_sweep_start_temp_c.max(sample.trdtempc_c);
+                    }
+                    SequencerEvent::SweepEnded { .. } => in_sweep = false,
+                    SequencerEvent::Completed { .. } | SequencerEvent::EStop => done = true,
+                    SequencerEvent::Aborted { reason } => {
+                        sum.alarm("ERROR", "procedure", format!("aborted: {reason}"), t);
+                        done = true;
+                    }
+                    SequencerEvent::SetpointRefused { step, axis, value, limit } => sum.alarm(
+                        "ERROR",
+                        "envelope",
+                        format!("step {step}: {axis} = {value} outside the rig envelope (limit {limit})"),
+                        t,
+                    ),
+                    _ => {}
+                }
+            }
+            if let Some(sp) = &out.setpoint {
+                sink.put(t, Outgoing::Setpoint(sp))?;
+                if let Err(refusal) = self.rig.apply_setpoint(sp) {
+                    sum.alarm("ERROR", "envelope", format!("virtual rig refused a setpoint: {refusal}"), t);
+                }
+            }
+            if done {
+                break;
+            }
+            if t > self.max_rig_time_s {
+                let st = self.seq.procedure_state(t);
+                return Err(HeadlessError::TooLong {
+                    limit_s: self.max_rig_time_s,
+                    at: format!("{} / {} / {}", st.procedure, st.section, st.sweep_name),
+                });
+            }
+        }
+        if first_tyre_mounted || self.wear_true.is_empty() {
+            self.wear_true.push(self.rig.truth().tread_worn_mm);
+        }
+        sum.summary.tyres_used = if sum.summary.tyre_changes > 0 { sum.summary.tyre_changes } else { 1 };
+        sum.summary.wear_mm_true = self.wear_true.clone();
+        Ok(sum.summary)
+    }
+}

@@ -1,0 +1,201 @@
+//! The run summary: where the rig time went, against the thesis's §11 table.
+
+use serde::{Deserialize, Serialize};
+use std::collections::BTreeMap;
+use std::fmt::Write as _;
+
+/// Rig time of one (sub-)procedure.
+#[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize)]
+pub struct ProcedureTimes {
+    pub name: String,
+    /// Rig time spent in it (sweeps, holds, settling, thermal pauses; not tyre changes) [s].
+    pub rig_time_s: f64,
+    /// Time in data steps (sweeps, holds, warm-up) [s].
+    pub sweep_time_s: f64,
+    /// Time waiting on the thermal gate [s].
+    pub thermal_pause_s: f64,
+    /// Data steps run.
+    pub sweeps: u32,
+    /// Thermal pauses released by the time-out (the next sweep started hot).
+    pub timeouts: u32,
+    /// Rig time by section [s].
+    pub sections: BTreeMap<String, f64>,
+}
+
+/// An alarm raised during the run.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct Alarm {
+    /// `WARN` or `ERROR`.
+    pub level: String,
+    /// Which check: `thermal_timeout`, `thermal_sensor`, `envelope`, `load_rating`, `wear`, …
+    pub check: String,
+    pub message: String,
+    pub rig_time_s: f64,
+}
+
+/// Everything a run reports.
+#[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize)]
+pub struct RunSummary {
+    /// The procedure file's name (`gs2mf`, `square_matrix`, …).
+    pub procedure: String,
+    /// The whole run including tyre changes [s].
+    pub total_rig_time_s: f64,
+    /// Tyre specimens used.
+    pub tyres_used: u32,
+    /// Per (sub-)procedure, in run order.
+    pub procedures: Vec<ProcedureTimes>,
+    /// Tyre changes and their rig time [s].
+    pub tyre_changes: u32,
+    pub tyre_change_time_s: f64,
+    pub alarms: Vec<Alarm>,
+    /// The procedure reached its end.
+    pub completed: bool,
+    /// Simulator truth: tread worn per specimen [mm] (virtual rig only).
+    pub wear_mm_true: Vec<f64>,
+    /// Data steps in the whole run.
+    pub sweeps: u32,
+    /// Thermal time-outs in the whole run.
+    pub timeouts: u32,
+    /// Highest TRDTEMPC seen at a sweep's start and during sweeps [°C].
+    pub max_sweep_start_temp_c: f64,
+    pub max_temp_c: f64,
+}
+
+/// The thesis's §11 rig-time table, for comparison: (row, seconds).
+pub fn thesis_rig_times(procedure: &str) -> Vec<(&'static str, f64)> {
+    match procedure {
+        "gs2mf" => vec![
+            ("gs2mf_freerolling", 4080.0),
+            ("gs2mf_brkdrv", 2875.0),
+            ("gs2mf_staticlong", 877.0),
+            ("tyre changes (2 x 900 s)", 1800.0),
+            ("total", 9632.0),
+        ],
+        "square_matrix" => vec![("3 pressures", 26850.0), ("tyre changes (10 x 900 s)", 9000.0), ("total", 35850.0)],
+        "gs2mf_freerolling" => vec![("gs2mf_freerolling", 4080.0)],
+        "gs2mf_brkdrv" => vec![("gs2mf_brkdrv", 2875.0)],
+        "gs2mf_staticlong" => vec![("gs2mf_staticlong", 877.0)],
+        _ => vec![],
+    }
+}
+
+impl RunSummary {
+    /// The summary as a table, with the thesis's figures beside ours where it has them.
+    pub fn table(&self) -> String {
+        let thesis: BTreeMap<&str, f64> = thesis_rig_times(&self.procedure).into_iter().collect();
+        let mut s = String::new();
+        let _ = writeln!(
+            s,
+            "{:<28} {:>11} {:>10} {:>11} {:>7} {:>8} {:>11}",
+            "procedure", "rig time s", "sweeps s", "pauses s", "sweeps", "timeouts", "thesis s"
+        );
+        for p in &self.procedures {
+            let th = thesis.get(p.name.as_str()).map_or("-".to_owned(), |v| format!("{v:.0}"));
+            let _ = writeln!(
+                s,
+                "{:<28} {:>11.0} {:>10.0} {:>11.0} {:>7} {:>8} {:>11}",
+                p.name, p.rig_time_s, p.sweep_time_s, p.thermal_pause_s, p.sweeps, p.timeouts, th
+            );
+        }
+        let tc_key = thesis.keys().find(|k| k.starts_with("tyre changes")).copied();
+        let _ = writeln!(
+            s,
+            "{:<28} {:>11.0} {:>10} {:>11} {:>7} {:>8} {:>11}",
+            format!("tyre changes ({})", self.tyre_changes),
+            self.tyre_change_time_s,
+            "",
+            "",
+            "",
+            "",
+            tc_key.and_then(|k| thesis.get(k)).map_or("-".to_owned(), |v| format!("{v:.0}"))
+        );
+        let _ = writeln!(
+            s,
+            "{:<28} {:>11.0} {:>10} {:>11} {:>7} {:>8} {:>11}",
+            format!("total ({} tyres)", self.tyres_used),
+            self.total_rig_time_s,
+            "",
+            "",
+            self.sweeps,
+            self.timeouts,
+            thesis.get("total").map_or("-".to_owned(), |v| format!("{v:.0}"))
+        );
+        s
+    }
+}
+
+/// Builds a [`RunSummary`] from what the cores report, sample by sample.
+#[derive(Debug, Default)]
+pub(crate) struct SummaryBuilder {
+    pub summary: RunSummary,
+    current: Option<(String, String)>, // (procedure, section)
+    in_tyre_change: bool,
+}
+
+impl SummaryBuilder {
+    pub fn new(procedure: &str) -> Self {
+        Self { summary: RunSummary { procedure: procedure.to_owned(), ..Default::default() }, ..Default::default() }
+    }
+
+    fn entry(&mut self, name: &str) -> &mut ProcedureTimes {
+        if let Some(i) = self.summary.procedures.iter().position(|p| p.name == name) {
+            return &mut self.summary.procedures[i];
+        }
+        self.summary.procedures.push(ProcedureTimes { name: name.to_owned(), ..Default::default() });
+        self.summary.procedures.last_mut().expect("just pushed")
+    }
+
+    /// The procedure state as published (its phase says where the time goes).
+    pub fn on_state(&mut self, st: &tyre_msgs::ProcedureState) {
+        self.in_tyre_change = st.phase == tyre_msgs::ProcedureState::PHASE_TYRE_CHANGE;
+        if !st.procedure.is_empty() {
+            self.current = Some((st.procedure.clone(), st.section.clone()));
+        }
+    }
+
+    /// `dt_s` of rig time passed while running.
+    pub fn add_time(&mut self, dt_s: f64) {
+        self.summary.total_rig_time_s += dt_s;
+        if self.in_tyre_change {
+            self.summary.tyre_change_time_s += dt_s;
+        } else if let Some((p, sec)) = self.current.clone() {
+            let e = self.entry(&p);
+            e.rig_time_s += dt_s;
+            *e.sections.entry(sec).or_default() += dt_s;
+        }
+    }
+
+    pub fn on_event(&mut self, ev: &sequencer::core::SequencerEvent) {
+        use sequencer::core::SequencerEvent as E;
+        match ev {
+            E::SweepStarted { procedure, .. } => {
+                self.entry(procedure).sweeps += 1;
+                self.summary.sweeps += 1;
+            }
+            E::SweepEnded { duration_s, .. } => {
+                if let Some((p, _)) = self.current.clone() {
+                    self.entry(&p).sweep_time_s += duration_s;
+                }
+            }
+            E::ThermalPauseEnded { duration_s, timed_out, .. } => {
+                if let Some((p, _)) = self.current.clone() {
+                    let e = self.entry(&p);
+                    e.thermal_pause_s += duration_s;
+                    if *timed_out {
+                        e.timeouts += 1;
+                    }
+                }
+                if *timed_out {
+                    self.summary.timeouts += 1;
+                }
+            }
+            E::TyreChange { .. } => self.summary.tyre_changes += 1,
+            E::Completed { .. } => self.summary.completed = true,
+            _ => {}
+        }
+    }
+
+    pub fn alarm(&mut self, level: &str, check: &str, message: String, rig_time_s: f64) {
+        self.summary.alarms.push(Alarm { level: level.to_owned(), check: check.to_owned(), message, rig_time_s });
+    }
+}
