@@ -80,9 +80,10 @@ impl DataKind {
             DataKind::StaticLong
         } else if w.contains("oncentre") || w.contains("oncenter") {
             DataKind::OnCentre
-        } else if w.contains("rollingradius") || w.contains("rolling_radius") {
-            DataKind::RollingRadius
-        } else if sec.contains("rolling_radius") && !w.contains("centre") {
+        } else if w.contains("rollingradius")
+            || w.contains("rolling_radius")
+            || (sec.contains("rolling_radius") && !w.contains("centre"))
+        {
             DataKind::RollingRadius
         } else if has("centre") || has("center") {
             DataKind::OnCentre
@@ -188,7 +189,7 @@ impl Dataset {
 /// than picking every n-th sample lowers the noise by √n; a bin's time is its samples' mean.
 pub fn resample(samples: &[Sample], period_s: f64) -> Vec<Sample> {
     let mut out = Vec::new();
-    if samples.is_empty() || !(period_s > 0.0) {
+    if samples.is_empty() || period_s.is_nan() || period_s <= 0.0 {
         return samples.to_vec();
     }
     let t0 = samples[0].time_s;

@@ -15,7 +15,7 @@ pub fn line_fit(xy: &[(f64, f64)]) -> Option<(f64, f64)> {
     let my = xy.iter().map(|p| p.1).sum::<f64>() / n;
     let sxx: f64 = xy.iter().map(|p| (p.0 - mx) * (p.0 - mx)).sum();
     let sxy: f64 = xy.iter().map(|p| (p.0 - mx) * (p.1 - my)).sum();
-    if !(sxx > 1e-300) {
+    if sxx.is_nan() || sxx <= 1e-300 {
         return None;
     }
     let b = sxy / sxx;

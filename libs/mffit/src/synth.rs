@@ -89,6 +89,7 @@ impl Gen<'_> {
     }
 
     /// One sample at a true operating point, measured with noise.
+    #[allow(clippy::too_many_arguments)] // one argument per channel of the operating point
     fn sample(
         &mut self,
         t: f64,

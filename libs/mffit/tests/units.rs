@@ -1,0 +1,233 @@
+//! Unit-level checks: Jacobian against finite differences, failure-mode detection, formats
+//! (TYDEX round trip, TTC SAE ≡ ISO-W, MCAP round trip), the written .tir reading back.
+
+use mffit::engine::{Channel, ChannelProblem, Point};
+use mffit::synth::{self, Noise, SynthOptions};
+use mffit::tydex::{self, Convention};
+use mffit::{DataKind, Dataset, FitOptions, Procedure, fit};
+use mftyre::{MfInput, TyreParams};
+use nalgebra::DVector;
+
+fn truth() -> TyreParams {
+    let path = concat!(env!("CARGO_MANIFEST_DIR"), "/../../launch-config/tyres/MagicFormula61_Paramerters.tir");
+    TyreParams::read_tir(std::path::Path::new(path)).expect("default tyre")
+}
+
+fn grid_points(t: &TyreParams, channel: Channel) -> Vec<Point> {
+    let mut v = Vec::new();
+    for fz in [3000.0, 6000.0, 9000.0] {
+        for a in [-10.0_f64, -4.0, -1.0, 0.5, 2.0, 8.0] {
+            for (k, g) in [(0.0, 0.0_f64), (0.05, 2.0), (-0.1, -3.0)] {
+                let input = MfInput {
+                    fz_n: fz,
+                    kappa: k,
+                    alpha_rad: a.to_radians(),
+                    gamma_rad: g.to_radians(),
+                    phit_per_m: 0.0,
+                    vx_mps: 16.6,
+                    p_pa: 2.4e5,
+                    omega_radps: 0.0,
+                };
+                v.push(Point { input, measured: channel.eval(t, &input) * 1.01 + 3.0 });
+            }
+        }
+    }
+    v
+}
+
+#[test]
+fn numeric_jacobians_agree_with_lsq_finite_differences() {
+    let t = truth();
+    let cases: [(Channel, &[&'static str]); 4] = [
+        (Channel::Fy0, &["PCY1", "PDY1", "PEY1", "PKY1", "PKY2", "PKY4", "PVY3", "PPY1"]),
+        (Channel::Mz0, &["QBZ1", "QCZ1", "QDZ1", "QDZ6", "QEZ1", "QHZ1", "PPZ1"]),
+        (Channel::Fy, &["RBY1", "RBY2", "RCY1", "RVY1", "RVY5", "RVY6"]),
+        (Channel::Mx, &["QSX1", "QSX2", "QSX3", "QSX4", "QSX6", "QSX9"]),
+    ];
+    for (channel, keys) in cases {
+        let pts = grid_points(&t, channel);
+        let problem = ChannelProblem::new(&t, keys, &pts, channel, 10.0);
+        let p = DVector::from_vec(mffit::engine::values_of(&t, keys));
+        let check = lsq::check_jacobian(&problem, &p).expect("check");
+        assert!(check.max_rel_error < 1e-4, "{channel:?}: {check:?}");
+    }
+}
+
+#[test]
+fn failure_modes_are_detected() {
+    let t = truth();
+    let range = mffit::ValidRange::of(&synth::gs2mf(
+        &t,
+        SynthOptions { rate_hz: 5.0, noise: Noise::OFF, ..Default::default() },
+    ));
+    // The true tyre is clean (apart from E, which it never pushes past 1 in range).
+    let clean = mffit::checks::check_all(&t, &range);
+    assert!(clean.iter().all(|w| !w.contains("square") && !w.contains("Dy")), "{clean:?}");
+    // Square ellipse: lateral force no longer reduced by slip ratio.
+    let mut sq = t.clone();
+    sq.set("RBY1", 0.01).unwrap();
+    sq.set("RBY2", 0.0).unwrap();
+    assert!(mffit::checks::ellipse_squareness(&sq, 6752.0, 2.6e5) > mffit::checks::SQUARE_LIMIT);
+    assert!(mffit::checks::check_all(&sq, &range).iter().any(|w| w.contains("square")));
+    // Non-physical friction and shape.
+    let mut bad = t.clone();
+    bad.set("PDY1", 0.3).unwrap();
+    bad.set("PDY2", -0.5).unwrap();
+    bad.set("PCY1", -1.0).unwrap();
+    let w = mffit::checks::check_all(&bad, &range);
+    assert!(w.iter().any(|w| w.contains("Cy ≤ 0")), "{w:?}");
+    assert!(w.iter().any(|w| w.contains("Dy/Fz")), "{w:?}");
+    // Extrapolation: a curvature that turns the force over past the peak.
+    let mut ex = t.clone();
+    ex.set("PCY1", 3.0).unwrap();
+    assert!(!mffit::checks::extrapolation(&ex, &range).is_empty());
+}
+
+fn small_dataset(noise: Noise) -> Dataset {
+    let t = truth();
+    synth::gs2mf(&t, SynthOptions { rate_hz: 10.0, noise, ..Default::default() })
+}
+
+#[test]
+fn tydex_round_trip_preserves_every_channel() {
+    let d = small_dataset(Noise::RIG);
+    let dir = tempfile::tempdir().unwrap();
+    let p = dir.path().join("x.tdx");
+    tydex::write_tydex(&p, &d).unwrap();
+    let back = tydex::read_tydex(&p).unwrap();
+    assert_eq!(back.segments.len(), d.segments.len());
+    assert_eq!(back.fnomin_n, d.fnomin_n);
+    for (a, b) in d.segments.iter().zip(&back.segments) {
+        assert_eq!((a.procedure, a.kind, &a.section, &a.sweep), (b.procedure, b.kind, &b.section, &b.sweep));
+        assert_eq!(a.samples.len(), b.samples.len());
+        for (x, y) in a.samples.iter().zip(&b.samples) {
+            let pairs = [
+                (x.time_s, y.time_s),
+                (x.fz_n, y.fz_n),
+                (x.kappa, y.kappa),
+                (x.alpha_rad, y.alpha_rad),
+                (x.gamma_rad, y.gamma_rad),
+                (x.p_pa, y.p_pa),
+                (x.vx_mps, y.vx_mps),
+                (x.omega_radps, y.omega_radps),
+                (x.fx_n, y.fx_n),
+                (x.fy_n, y.fy_n),
+                (x.mx_nm, y.mx_nm),
+                (x.my_nm, y.my_nm),
+                (x.mz_nm, y.mz_nm),
+                (x.rl_m, y.rl_m),
+                (x.temp_c, y.temp_c),
+                (x.dist_m, y.dist_m),
+            ];
+            for (i, (u, v)) in pairs.iter().enumerate() {
+                assert!((u - v).abs() <= 1e-10 * u.abs().max(1.0), "channel {i}: {u} vs {v}");
+            }
+        }
+    }
+}
+
+#[test]
+fn mcap_round_trip_keeps_segments() {
+    let d = small_dataset(Noise::RIG);
+    let dir = tempfile::tempdir().unwrap();
+    let p = dir.path().join("x.mcap");
+    mffit::logs::write_log(&p, &d).unwrap();
+    let back = mffit::logs::read_log(&p).unwrap();
+    assert_eq!(back.segments.len(), d.segments.len());
+    assert_eq!(back.fnomin_n, d.fnomin_n);
+    for (a, b) in d.segments.iter().zip(&back.segments) {
+        assert_eq!((a.procedure, a.kind), (b.procedure, b.kind), "{} / {}", a.section, a.sweep);
+        assert_eq!(a.samples.len(), b.samples.len());
+        let (x, y) = (a.samples[1], b.samples[1]);
+        assert!((x.fy_n - y.fy_n).abs() < 1e-9 && (x.alpha_rad - y.alpha_rad).abs() < 1e-12);
+    }
+}
+
+fn lateral_and_long(d: &Dataset) -> Dataset {
+    // TTC files hold force & moment sweeps only.
+    Dataset {
+        segments: d.segments.iter().filter(|s| s.kind == DataKind::Sweep).cloned().collect(),
+        fnomin_n: d.fnomin_n,
+        sources: d.sources.clone(),
+    }
+}
+
+#[test]
+fn ttc_with_sae_signs_fits_the_same_model_as_its_iso_equivalent() {
+    let d = lateral_and_long(&small_dataset(Noise::RIG));
+    let dir = tempfile::tempdir().unwrap();
+    let sae = dir.path().join("sae.dat");
+    let iso = dir.path().join("iso.dat");
+    std::fs::write(&sae, tydex::to_ttc(&d, Convention::Sae)).unwrap();
+    std::fs::write(&iso, tydex::to_ttc(&d, Convention::IsoW)).unwrap();
+    let a = tydex::read_ttc(&sae, Convention::Sae).unwrap();
+    let b = tydex::read_ttc(&iso, Convention::IsoW).unwrap();
+    assert!(a.segments.iter().any(|s| s.procedure == Procedure::BrkDrv));
+    assert!(a.segments.iter().any(|s| s.procedure == Procedure::FreeRolling));
+    // ISO-W after conversion: positive load, and FY opposes the slip angle.
+    let s = a.segments.iter().flat_map(|s| &s.samples).find(|s| s.alpha_rad > 0.1 && s.kappa.abs() < 0.01).unwrap();
+    assert!(s.fz_n > 0.0 && s.fy_n < 0.0);
+    let opts = FitOptions { max_points: 800, fnomin_n: Some(6752.0), max_iterations: 30, ..FitOptions::default() };
+    let fa = fit(&a, &opts).unwrap();
+    let fb = fit(&b, &opts).unwrap();
+    for k in ["PDY1", "PKY1", "PCY1", "QDZ1", "PDX1", "PKX1", "RBX1", "QSX2"] {
+        let (x, y) = (fa.params.get(k).unwrap(), fb.params.get(k).unwrap());
+        assert!((x - y).abs() <= 1e-6 * x.abs().max(1.0), "{k}: {x} vs {y}");
+    }
+    // And it is the right model: lateral force matches the true tyre.
+    let t = truth();
+    let i = MfInput {
+        fz_n: 6000.0,
+        kappa: 0.0,
+        alpha_rad: 0.05,
+        gamma_rad: 0.0,
+        phit_per_m: 0.0,
+        vx_mps: 16.6,
+        p_pa: 2.6e5,
+        omega_radps: 0.0,
+    };
+    let (ft, ff) =
+        (mftyre::pure_fy(&t, mftyre::UseMode::M111, &i), mftyre::pure_fy(&fa.params, mftyre::UseMode::M111, &i));
+    assert!((ft - ff).abs() < 0.02 * ft.abs(), "{ft} vs {ff}");
+}
+
+#[test]
+fn written_tir_reads_back_and_evaluates_the_same() {
+    let d = small_dataset(Noise::RIG);
+    let r = fit(&d, &FitOptions { max_points: 800, max_iterations: 30, ..FitOptions::default() }).unwrap();
+    let text = r.params.to_tir_string();
+    assert!(text.contains("FITTYP") && text.contains("61"));
+    let back = TyreParams::from_tir_str(&text, "fitted.tir").unwrap();
+    for a in [-0.2, -0.05, 0.0, 0.1] {
+        for k in [-0.1, 0.0, 0.08] {
+            let i = MfInput {
+                fz_n: 7000.0,
+                kappa: k,
+                alpha_rad: a,
+                gamma_rad: 0.01,
+                phit_per_m: 0.0,
+                vx_mps: 16.6,
+                p_pa: 2.5e5,
+                omega_radps: 0.0,
+            };
+            let (x, y) = (
+                mftyre::evaluate(&r.params, mftyre::UseMode::M111, &i),
+                mftyre::evaluate(&back, mftyre::UseMode::M111, &i),
+            );
+            for (u, v) in [(x.fx_n, y.fx_n), (x.fy_n, y.fy_n), (x.mz_nm, y.mz_nm), (x.mx_nm, y.mx_nm), (x.rl_m, y.rl_m)]
+            {
+                assert!((u - v).abs() <= 1e-8 * u.abs().max(1.0), "{u} vs {v}");
+            }
+        }
+    }
+    // Report files.
+    let dir = tempfile::tempdir().unwrap();
+    let files = mffit::report::write(dir.path(), &r, None).unwrap();
+    assert!(files.iter().any(|f| f.ends_with("fit.json")));
+    let json: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(dir.path().join("fit.json")).unwrap()).unwrap();
+    let st = json["stages"].as_array().unwrap();
+    assert!(st.iter().any(|s| s["stage"] == "fy_pure" && s["nrmse_pct"].as_f64().unwrap() < 2.0));
+    assert!(json["wall_time_s"].as_f64().unwrap() > 0.0);
+    assert!(dir.path().join("friction_ellipse.png").exists());
+}

@@ -1,0 +1,126 @@
+//! `tyrerig fit`: staged MF-Tyre 6.1 fit of GS2MF logs (see `docs/fitting.md`).
+
+use std::path::{Path, PathBuf};
+
+use anyhow::{Context, Result, bail};
+use clap::Args;
+use mffit::stages::{FitOptions, fit};
+use mftyre::TyreParams;
+
+/// Arguments of `tyrerig fit`.
+#[derive(Debug, Args)]
+pub struct FitArgs {
+    /// Logs to fit: MCAP logs of the FreeRolling, BrkDrv and StaticLong procedures (TYDEX `.tdx`
+    /// files are accepted too)
+    #[arg(required = true)]
+    pub logs: Vec<PathBuf>,
+    /// The fitted tyre property file (FITTYP 61)
+    #[arg(long)]
+    pub out: PathBuf,
+    /// Directory for the report (report.md, fit.json, PNG/SVG plots)
+    #[arg(long)]
+    pub report: Option<PathBuf>,
+    /// Nominal load Fz0 [N] (default: the log's metadata, else the median sweep load)
+    #[arg(long)]
+    pub fnomin: Option<f64>,
+    /// Template .tir for the coefficients no stage fits (inertia, contact patch, …)
+    #[arg(long)]
+    pub template: Option<PathBuf>,
+    /// Also fit the graph sweeps (drift/wear checks; excluded by default as in the thesis)
+    #[arg(long)]
+    pub include_graph_sweeps: bool,
+    /// Robust (soft-L1) loss with this threshold in % of each channel's peak
+    #[arg(long)]
+    pub robust: Option<f64>,
+    /// Largest number of 10 Hz points per stage (evenly decimated beyond)
+    #[arg(long, default_value_t = 3000)]
+    pub max_points: usize,
+    /// Worker threads (default: all cores)
+    #[arg(long)]
+    pub threads: Option<usize>,
+    /// Reference tyre (e.g. the virtual rig's): adds a held-out accuracy table to the report
+    #[arg(long)]
+    pub truth: Option<PathBuf>,
+}
+
+fn read_any(path: &Path) -> Result<mffit::Dataset> {
+    let ext = path.extension().map(|e| e.to_string_lossy().to_ascii_lowercase()).unwrap_or_default();
+    Ok(match ext.as_str() {
+        "tdx" | "tydex" => mffit::tydex::read_tydex(path)?,
+        _ => mffit::logs::read_log(path)?,
+    })
+}
+
+/// Runs the fit.
+pub fn run(args: FitArgs) -> Result<()> {
+    let mut data = mffit::Dataset::default();
+    for p in &args.logs {
+        let d = read_any(p).with_context(|| format!("reading {}", p.display()))?;
+        eprintln!("{}: {} segments, {} samples", p.display(), d.segments.len(), d.len());
+        data.extend(d);
+    }
+    if data.is_empty() {
+        bail!("no data in {:?}", args.logs);
+    }
+    let template = match &args.template {
+        Some(t) => Some(TyreParams::read_tir(t)?),
+        None => None,
+    };
+    let mut opts = FitOptions {
+        include_graph_sweeps: args.include_graph_sweeps,
+        robust_pct: args.robust,
+        max_points: args.max_points,
+        fnomin_n: args.fnomin,
+        template,
+        ..FitOptions::default()
+    };
+    if let Some(t) = args.threads {
+        opts.threads = t.max(1);
+    }
+    let result = fit(&data, &opts)?;
+    eprintln!("{:<18} {:>6} {:>12} {:>12} {:>6} {:>8}", "stage", "points", "rmse", "start rmse", "iter", "wall s");
+    for s in &result.stages {
+        match &s.skipped {
+            Some(r) => eprintln!("{:<18} skipped: {r}", s.stage),
+            None => eprintln!(
+                "{:<18} {:>6} {:>12.4} {:>12.4} {:>6} {:>8.2}",
+                s.stage, s.points, s.rmse, s.initial_rmse, s.iterations, s.wall_s
+            ),
+        }
+    }
+    for w in &result.warnings {
+        eprintln!("warning: {w}");
+    }
+    eprintln!("total wall time {:.2} s", result.wall_s);
+    std::fs::write(&args.out, result.params.to_tir_string())
+        .with_context(|| format!("{}: cannot write", args.out.display()))?;
+    // The written file must load back (the same reader `tyrerig model eval` uses).
+    TyreParams::read_tir(&args.out)
+        .with_context(|| format!("{}: written file does not read back", args.out.display()))?;
+    eprintln!("wrote {}", args.out.display());
+    let accuracy = match &args.truth {
+        Some(t) => {
+            let truth = TyreParams::read_tir(t)?;
+            let acc = mffit::accuracy::compare(
+                &truth,
+                &result.params,
+                &result.range,
+                &mffit::accuracy::Support::of_fit(&result),
+            );
+            eprintln!("accuracy against {} (held-out grid inside the tested range):", t.display());
+            for a in &acc {
+                eprintln!(
+                    "  {:<12} {:>7.2} % of peak RMS (max {:>6.2} %)",
+                    a.channel, a.rms_pct_of_peak, a.max_pct_of_peak
+                );
+            }
+            Some(acc)
+        }
+        None => None,
+    };
+    if let Some(dir) = &args.report {
+        let files = mffit::report::write(dir, &result, accuracy.as_deref())?;
+        eprintln!("report: {} files in {}", files.len(), dir.display());
+    }
+    Ok(())
+}
