@@ -1,0 +1,489 @@
+//! The doctor's loop: simulate, find, name (greedy, cross-validated), add, show.
+
+use crate::DoctorError;
+use crate::data::Dataset;
+use crate::effects::{CH_FY, CH_RL, CHANNELS, Effect, EffectParams, Evaluator, param_specs, untestable_reason};
+use crate::fit::{FitOptions, FitSpec, chi2, count_valid, cross_validate, fit_effects, folds, measured, noise_floor};
+use mftyre::TyreParams;
+use serde::Serialize;
+
+/// Settings of a diagnosis.
+#[derive(Debug, Clone)]
+pub struct DoctorConfig {
+    /// Held-out folds (sweeps are dealt round-robin into them).
+    pub folds: usize,
+    /// Smallest evidence (share of the held-out χ² explained, after the parameter penalty) for
+    /// an effect to be named.
+    pub min_evidence: f64,
+    /// Smallest excess of the present model's held-out χ² over the noise floor (χ²/N − 1) for
+    /// anything to be looked for.
+    pub min_excess: f64,
+    /// Most effects named.
+    pub max_effects: usize,
+    /// Candidates tested.
+    pub candidates: Vec<Effect>,
+    /// An effect's region: points where it changes the prediction of its main channel by more
+    /// than this many noise σ.
+    pub region_sigma: f64,
+    /// Fit settings.
+    pub fit: FitOptions,
+}
+
+impl Default for DoctorConfig {
+    fn default() -> Self {
+        Self {
+            folds: 4,
+            min_evidence: 0.05,
+            min_excess: 0.1,
+            max_effects: 3,
+            candidates: Effect::ALL.to_vec(),
+            region_sigma: 2.0,
+            fit: FitOptions::default(),
+        }
+    }
+}
+
+/// A candidate's score in one round.
+#[derive(Debug, Clone, Serialize)]
+pub struct CandidateScore {
+    /// The candidate.
+    pub effect: Effect,
+    /// Testable on this data (else `reason`).
+    pub testable: bool,
+    /// Why not testable.
+    pub reason: String,
+    /// Parameters it adds.
+    pub n_params: usize,
+    /// Held-out χ² of the present model.
+    pub chi2_before_heldout: f64,
+    /// Held-out χ² with the candidate added.
+    pub chi2_after_heldout: f64,
+    /// Held-out folds it improved, of `folds`.
+    pub folds_improved: usize,
+    /// Folds.
+    pub folds: usize,
+    /// Evidence: (Δχ² − k·ln N) / χ²_before on held-out sweeps.
+    pub evidence: f64,
+    /// Held-out χ² reduction per channel.
+    pub delta_chi2_by_channel: [f64; 4],
+    /// Significant (would be named if best).
+    pub significant: bool,
+}
+
+/// A named effect with its evidence and before/after RMS.
+#[derive(Debug, Clone, Serialize)]
+pub struct NamedEffect {
+    /// The effect.
+    pub effect: Effect,
+    /// Its evidence score.
+    pub evidence: f64,
+    /// The best other candidate of the round and its evidence.
+    pub runner_up: Option<(Effect, f64)>,
+    /// Main channel (largest held-out χ² reduction).
+    pub channel: String,
+    /// The region where the effect changes the prediction beyond the noise, in words.
+    pub region: String,
+    /// Points in the region.
+    pub region_points: usize,
+    /// RMS of the main channel's residual in the region, fitted model before the effect.
+    pub rms_before: f64,
+    /// … and with it (fit on all sweeps).
+    pub rms_after: f64,
+    /// The same on held-out sweeps (cross-validated predictions).
+    pub rms_before_heldout: f64,
+    /// … and with it.
+    pub rms_after_heldout: f64,
+    /// Correlation of the present residual (main channel) with the effect's predicted change.
+    pub correlation: f64,
+    /// Fitted parameters (on all sweeps).
+    pub params: EffectParams,
+}
+
+/// One bin of the region search.
+#[derive(Debug, Clone, Serialize)]
+pub struct RegionBin {
+    /// Variable binned.
+    pub variable: String,
+    /// Bin label.
+    pub bin: String,
+    /// Points.
+    pub n: usize,
+    /// RMS / noise σ per channel (FX, FYW, MZW, DSTWOWHC) of the base model's residual.
+    pub rms_over_noise: [f64; 4],
+    /// Beyond noise: some channel's RMS/σ exceeds 1.3 on ≥ 20 points.
+    pub flagged: bool,
+}
+
+/// Per-channel RMS table.
+#[derive(Debug, Clone, Serialize)]
+pub struct RmsTable {
+    /// Channel names.
+    pub channels: [&'static str; 4],
+    /// Noise floor σ (physical units: N, N, N·m, m).
+    pub noise: [f64; 4],
+    /// Base model, all points.
+    pub base: [f64; 4],
+    /// Final model fitted on all sweeps.
+    pub final_fit: [f64; 4],
+    /// Final model, held-out sweeps.
+    pub final_heldout: [f64; 4],
+}
+
+/// Everything a diagnosis found.
+#[derive(Debug, Clone, Serialize)]
+pub struct Diagnosis {
+    /// Effects named, in order.
+    pub named: Vec<NamedEffect>,
+    /// Candidate scores per round.
+    pub rounds: Vec<Vec<CandidateScore>>,
+    /// Region bins of the base model's residual.
+    pub regions: Vec<RegionBin>,
+    /// RMS per channel.
+    pub rms: RmsTable,
+    /// Points and sweeps used.
+    pub points: usize,
+    /// Sweeps.
+    pub sweeps: usize,
+    /// Why the search stopped.
+    pub stop_reason: String,
+    /// Reference temperature of the thermal extension [°C].
+    pub t_ref_c: f64,
+    /// Reference speed of the speed extension [m/s].
+    pub v_ref_mps: f64,
+    /// Plot data (not serialised).
+    #[serde(skip)]
+    pub plot: PlotData,
+}
+
+/// Arrays the report plots from.
+#[derive(Debug, Clone, Default)]
+pub struct PlotData {
+    /// Measured values at the points.
+    pub meas: Vec<[f64; 4]>,
+    /// Base model predictions.
+    pub base: Vec<[f64; 4]>,
+    /// Fitted predictions after each named effect (index 0 = after the first).
+    pub after: Vec<Vec<[f64; 4]>>,
+    /// Held-out predictions after each named effect.
+    pub after_heldout: Vec<Vec<[f64; 4]>>,
+    /// Region points of each named effect.
+    pub region: Vec<Vec<usize>>,
+}
+
+fn rms_of(meas: &[[f64; 4]], pred: &[[f64; 4]], ch: usize, which: &[usize]) -> f64 {
+    let (mut s, mut n) = (0.0, 0usize);
+    for &k in which {
+        let r = meas[k][ch] - pred[k][ch];
+        if r.is_finite() {
+            s += r * r;
+            n += 1;
+        }
+    }
+    if n == 0 { 0.0 } else { (s / n as f64).sqrt() }
+}
+
+fn total(c: [f64; 4]) -> f64 {
+    c.iter().sum()
+}
+
+/// Runs the doctor on `ds` with the base model `base`.
+pub fn diagnose(ds: &Dataset, base: &TyreParams, cfg: &DoctorConfig) -> Result<Diagnosis, DoctorError> {
+    let ev = Evaluator::new(ds, base);
+    let all: Vec<usize> = (0..ds.len()).collect();
+    let meas = measured(&ev);
+    let base_pred = ev.predict(&[], &all);
+    let sigma = noise_floor(&ev, &meas, &base_pred);
+    let fl = folds(&ev, cfg.folds.max(2));
+    if fl.len() < 2 {
+        return Err(DoctorError::NoData {
+            what: format!("{} sweep(s): cross-validation needs at least 2", ds.sweeps.len()),
+        });
+    }
+    let n_res = count_valid(&meas, &all).max(1) as f64;
+    let regions = find_regions(ds, &meas, &base_pred, &sigma);
+
+    let mut chosen: Vec<FitSpec> = Vec::new();
+    let mut cur_fit = base_pred.clone();
+    let mut cur_ho = base_pred.clone();
+    let mut named = Vec::new();
+    let mut rounds = Vec::new();
+    let mut plot = PlotData { meas: meas.clone(), base: base_pred.clone(), ..Default::default() };
+    let mut stop_reason = String::new();
+    let mut final_params: Vec<EffectParams> = Vec::new();
+
+    while named.len() < cfg.max_effects {
+        let fold_chi_before: Vec<f64> = fl.iter().map(|f| total(chi2(&meas, &cur_ho, &sigma, f))).collect();
+        let chi_before: f64 = fold_chi_before.iter().sum();
+        let excess = chi_before / n_res - 1.0;
+        if excess < cfg.min_excess {
+            stop_reason = format!(
+                "the residual is at the noise floor (held-out χ²/N = {:.3}, excess {:.3} < {})",
+                chi_before / n_res,
+                excess,
+                cfg.min_excess
+            );
+            break;
+        }
+        let mut scores = Vec::new();
+        let mut cv_preds = Vec::new();
+        for &eff in &cfg.candidates {
+            if chosen.iter().any(|c| c.effect == eff) {
+                continue;
+            }
+            if let Some(reason) = untestable_reason(eff, ds) {
+                scores.push(CandidateScore {
+                    effect: eff,
+                    testable: false,
+                    reason,
+                    n_params: 0,
+                    chi2_before_heldout: chi_before,
+                    chi2_after_heldout: chi_before,
+                    folds_improved: 0,
+                    folds: fl.len(),
+                    evidence: 0.0,
+                    delta_chi2_by_channel: [0.0; 4],
+                    significant: false,
+                });
+                cv_preds.push(None);
+                continue;
+            }
+            let mut specs = chosen.clone();
+            let new = FitSpec { effect: eff, params: param_specs(eff, ds, base) };
+            let k = new.params.len() + usize::from(eff == Effect::BreakIn);
+            specs.push(new);
+            let pred = cross_validate(&ev, &specs, &fl, &meas, sigma, cfg.fit);
+            let fold_chi: Vec<f64> = fl.iter().map(|f| total(chi2(&meas, &pred, &sigma, f))).collect();
+            let chi_after: f64 = fold_chi.iter().sum();
+            let improved = fold_chi.iter().zip(&fold_chi_before).filter(|(a, b)| a < b).count();
+            let cb = chi2(&meas, &cur_ho, &sigma, &all);
+            let ca = chi2(&meas, &pred, &sigma, &all);
+            let evidence = (chi_before - chi_after - k as f64 * n_res.ln()) / chi_before;
+            let significant = evidence >= cfg.min_evidence && improved + 1 >= fl.len();
+            scores.push(CandidateScore {
+                effect: eff,
+                testable: true,
+                reason: String::new(),
+                n_params: k,
+                chi2_before_heldout: chi_before,
+                chi2_after_heldout: chi_after,
+                folds_improved: improved,
+                folds: fl.len(),
+                evidence,
+                delta_chi2_by_channel: [cb[0] - ca[0], cb[1] - ca[1], cb[2] - ca[2], cb[3] - ca[3]],
+                significant,
+            });
+            cv_preds.push(Some((specs, pred)));
+        }
+        let mut order: Vec<usize> = (0..scores.len()).filter(|&i| scores[i].testable).collect();
+        order.sort_by(|&a, &b| scores[b].evidence.total_cmp(&scores[a].evidence));
+        let best = order.first().copied();
+        let runner_up = order.get(1).map(|&i| (scores[i].effect, scores[i].evidence));
+        rounds.push(scores.clone());
+        let Some(bi) = best.filter(|&i| scores[i].significant) else {
+            stop_reason = match best {
+                Some(i) => format!(
+                    "no significant candidate left: the best, {}, explains {:.1} % of the held-out χ² (needs {:.1} %) and improves {}/{} folds",
+                    scores[i].effect.name(),
+                    100.0 * scores[i].evidence,
+                    100.0 * cfg.min_evidence,
+                    scores[i].folds_improved,
+                    scores[i].folds
+                ),
+                None => "no testable candidate".to_owned(),
+            };
+            break;
+        };
+        let Some((specs, pred_ho)) = cv_preds[bi].take() else { break };
+        let score = &scores[bi];
+        let (fitted, _) = fit_effects(&ev, &specs, &all, &meas, sigma, cfg.fit);
+        let pred_fit = ev.predict(&fitted, &all);
+        let ch = (0..4)
+            .max_by(|&a, &b| score.delta_chi2_by_channel[a].total_cmp(&score.delta_chi2_by_channel[b]))
+            .unwrap_or(CH_FY);
+        // Region: where the new effect moves the prediction of the main channel beyond noise.
+        let mut thr = cfg.region_sigma;
+        let mut region: Vec<usize>;
+        loop {
+            region = all
+                .iter()
+                .copied()
+                .filter(|&k| ((pred_fit[k][ch] - cur_fit[k][ch]) / sigma[ch]).abs() > thr && meas[k][ch].is_finite())
+                .collect();
+            if region.len() >= 20 || thr <= 0.5 {
+                break;
+            }
+            thr /= 2.0;
+        }
+        let corr = correlation(
+            all.iter().map(|&k| meas[k][ch] - cur_fit[k][ch]),
+            all.iter().map(|&k| pred_fit[k][ch] - cur_fit[k][ch]),
+        );
+        let eff_params = fitted.iter().find(|e| e.effect == score.effect).cloned().unwrap_or(EffectParams {
+            effect: score.effect,
+            keys: vec![],
+            values: vec![],
+            threshold_w: 0.0,
+        });
+        named.push(NamedEffect {
+            effect: score.effect,
+            evidence: score.evidence,
+            runner_up,
+            channel: CHANNELS[ch].to_owned(),
+            region: describe_region(ds, &ev, score.effect, &region, thr),
+            region_points: region.len(),
+            rms_before: rms_of(&meas, &cur_fit, ch, &region),
+            rms_after: rms_of(&meas, &pred_fit, ch, &region),
+            rms_before_heldout: rms_of(&meas, &cur_ho, ch, &region),
+            rms_after_heldout: rms_of(&meas, &pred_ho, ch, &region),
+            correlation: corr,
+            params: eff_params,
+        });
+        plot.after.push(pred_fit.clone());
+        plot.after_heldout.push(pred_ho.clone());
+        plot.region.push(region);
+        chosen = specs;
+        cur_fit = pred_fit;
+        cur_ho = pred_ho;
+        final_params = fitted;
+    }
+    if stop_reason.is_empty() {
+        stop_reason = format!("stopped at the limit of {} effects", cfg.max_effects);
+    }
+    // Keep each named effect's parameters from the final joint fit.
+    for ne in &mut named {
+        if let Some(p) = final_params.iter().find(|p| p.effect == ne.effect) {
+            ne.params = p.clone();
+        }
+    }
+    let rms = RmsTable {
+        channels: CHANNELS,
+        noise: sigma,
+        base: std::array::from_fn(|ch| rms_of(&meas, &base_pred, ch, &all)),
+        final_fit: std::array::from_fn(|ch| rms_of(&meas, &cur_fit, ch, &all)),
+        final_heldout: std::array::from_fn(|ch| rms_of(&meas, &cur_ho, ch, &all)),
+    };
+    Ok(Diagnosis {
+        named,
+        rounds,
+        regions,
+        rms,
+        points: ds.len(),
+        sweeps: ds.sweeps.len(),
+        stop_reason,
+        t_ref_c: ev.t_ref_c,
+        v_ref_mps: ev.v_ref_mps,
+        plot,
+    })
+}
+
+/// Pearson correlation.
+pub fn correlation(a: impl Iterator<Item = f64>, b: impl Iterator<Item = f64>) -> f64 {
+    let pairs: Vec<(f64, f64)> = a.zip(b).filter(|(x, y)| x.is_finite() && y.is_finite()).collect();
+    let n = pairs.len() as f64;
+    if n < 3.0 {
+        return 0.0;
+    }
+    let (ma, mb) = (pairs.iter().map(|p| p.0).sum::<f64>() / n, pairs.iter().map(|p| p.1).sum::<f64>() / n);
+    let (mut sab, mut saa, mut sbb) = (0.0, 0.0, 0.0);
+    for (x, y) in pairs {
+        sab += (x - ma) * (y - mb);
+        saa += (x - ma).powi(2);
+        sbb += (y - mb).powi(2);
+    }
+    if saa <= 0.0 || sbb <= 0.0 { 0.0 } else { sab / (saa * sbb).sqrt() }
+}
+
+fn percentile(mut v: Vec<f64>, q: f64) -> f64 {
+    v.retain(|x| x.is_finite());
+    if v.is_empty() {
+        return f64::NAN;
+    }
+    v.sort_by(f64::total_cmp);
+    v[((v.len() - 1) as f64 * q).round() as usize]
+}
+
+fn describe_region(ds: &Dataset, ev: &Evaluator<'_>, effect: Effect, region: &[usize], thr: f64) -> String {
+    if region.is_empty() {
+        return "nowhere beyond the noise".to_owned();
+    }
+    let s = &ds.series;
+    let idx: Vec<usize> = region.iter().map(|&k| ds.points[k]).collect();
+    let range = |f: &dyn Fn(usize) -> f64| {
+        let v: Vec<f64> = idx.iter().map(|&i| f(i)).collect();
+        (percentile(v.clone(), 0.05), percentile(v, 0.95))
+    };
+    let mut parts = Vec::new();
+    if ds.has_lateral() {
+        let (a, b) = range(&|i| s.alpha_deg[i].abs());
+        parts.push(format!("|SLIPANGL| {a:.1}–{b:.1}°"));
+    }
+    if ds.has_longitudinal() {
+        let (a, b) = range(&|i| s.kappa[i].abs() * 100.0);
+        parts.push(format!("|LONGSLIP| {a:.1}–{b:.1} %"));
+    }
+    let (a, b) = range(&|i| s.fz_n[i] * 1e-3);
+    parts.push(format!("FZW {a:.1}–{b:.1} kN"));
+    let (name, unit) = effect.variable();
+    let (a, b) = range(&|i| effect.variable_value(ds, i));
+    parts.push(format!("{name} {a:.2}–{b:.2} {unit}"));
+    let sw: std::collections::BTreeSet<usize> = region.iter().map(|&k| ds.point_sweep(k)).collect();
+    let _ = ev;
+    format!(
+        "{} ({} of {} points, {} of {} sweeps, where the effect moves the prediction by > {:.1} σ)",
+        parts.join(", "),
+        region.len(),
+        ds.len(),
+        sw.len(),
+        ds.sweeps.len(),
+        thr
+    )
+}
+
+/// Bins the base residual by operating region, time in the test, thermal state and slip rate.
+fn find_regions(ds: &Dataset, meas: &[[f64; 4]], pred: &[[f64; 4]], sigma: &[f64; 4]) -> Vec<RegionBin> {
+    let s = &ds.series;
+    type Getter<'g> = Box<dyn Fn(usize) -> f64 + 'g>;
+    let n_sw = ds.sweeps.len().max(1) as f64;
+    let e_max = ds.points.iter().map(|&i| s.sliding_energy_j[i]).fold(0.0, f64::max).max(1.0);
+    let vars: Vec<(&str, Getter<'_>, Vec<f64>)> = vec![
+        ("|SLIPANGL| [deg]", Box::new(|i| s.alpha_deg[i].abs()), vec![0.0, 1.0, 3.0, 6.0, 10.0, 90.0]),
+        ("|LONGSLIP| [%]", Box::new(|i| s.kappa[i].abs() * 100.0), vec![0.0, 1.0, 3.0, 8.0, 100.0]),
+        ("FZW [kN]", Box::new(|i| s.fz_n[i] * 1e-3), vec![0.0, 3.0, 5.0, 7.0, 9.0, 100.0]),
+        ("INCLANGL [deg]", Box::new(|i| s.gamma_deg[i]), vec![-90.0, -1.0, 1.0, 90.0]),
+        ("INFLPRES [bar]", Box::new(|i| s.p_pa[i] * 1e-5), vec![0.0, 2.35, 2.95, 10.0]),
+        ("sweep (share of test)", Box::new(move |i| s.sweep[i] as f64 / n_sw), vec![0.0, 0.25, 0.5, 0.75, 1.01]),
+        (
+            "sliding energy (share of max)",
+            Box::new(move |i| s.sliding_energy_j[i] / e_max),
+            vec![0.0, 0.25, 0.5, 0.75, 1.01],
+        ),
+        ("grip temperature [°C]", Box::new(|i| s.temp_grip_c[i]), vec![-50.0, 30.0, 45.0, 60.0, 75.0, 300.0]),
+        ("slip-angle rate [deg/s]", Box::new(|i| s.alpha_rate_dps[i]), vec![-1e9, -10.0, -1.0, 1.0, 10.0, 1e9]),
+    ];
+    let mut out = Vec::new();
+    for (name, get, edges) in vars {
+        for w in edges.windows(2) {
+            let which: Vec<usize> = (0..ds.len())
+                .filter(|&k| {
+                    let v = get(ds.points[k]);
+                    v >= w[0] && v < w[1]
+                })
+                .collect();
+            if which.is_empty() {
+                continue;
+            }
+            let r: [f64; 4] = std::array::from_fn(|ch| rms_of(meas, pred, ch, &which) / sigma[ch]);
+            let flagged = which.len() >= 20 && r.iter().any(|&x| x > 1.3);
+            let fmt = |x: f64| if x.abs() >= 1e8 { "∞".to_owned() } else { format!("{x}") };
+            out.push(RegionBin {
+                variable: name.to_owned(),
+                bin: format!("[{}, {})", fmt(w[0]), fmt(w[1])),
+                n: which.len(),
+                rms_over_noise: r,
+                flagged,
+            });
+        }
+    }
+    let _ = CH_RL;
+    out
+}

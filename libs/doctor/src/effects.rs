@@ -1,0 +1,421 @@
+//! The effect catalogue: each candidate effect's physical variable, its parametric extension of
+//! MF-Tyre 6.1, and the evaluation of a base model with any set of extensions at the measured
+//! operating points.
+//!
+//! Two kinds of effect:
+//! - **Extensions** (`thermal`, `wear`, `break_in`, `transient`, `speed`): terms MF-Tyre 6.1
+//!   does not have, driven by a state variable the doctor derives from the log (grip temperature,
+//!   sliding energy, severe sliding energy, travelled distance, belt speed). They act through
+//!   the MF scaling factors λ per point (grip λμ, stiffness λK, shape λC), through the slips
+//!   (relaxation), or on the loaded radius.
+//! - **Refits** (`pressure`, `camber`, `load`, `offset`): effects MF-Tyre 6.1 models with its
+//!   own coefficients; the candidate re-fits those coefficients (a base model whose pressure
+//!   terms are zero, or wrong, is repaired where `tyrerig model eval` applies it directly).
+
+use crate::data::Dataset;
+use mftyre::{MfInput, TyreParams, UseMode, evaluate_scaled};
+use serde::Serialize;
+
+/// Channels residuals are computed on.
+pub const CHANNELS: [&str; 4] = ["FX", "FYW", "MZW", "DSTWOWHC"];
+/// Channel index of FX.
+pub const CH_FX: usize = 0;
+/// Channel index of FYW.
+pub const CH_FY: usize = 1;
+/// Channel index of MZW.
+pub const CH_MZ: usize = 2;
+/// Channel index of DSTWOWHC.
+pub const CH_RL: usize = 3;
+
+/// A candidate effect (the vocabulary of `doctor.json`).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Serialize, PartialOrd, Ord)]
+#[serde(rename_all = "snake_case")]
+pub enum Effect {
+    /// Tread temperature: grip and stiffness.
+    Thermal,
+    /// Tread wear: stiffness, shape and loaded radius with sliding energy.
+    Wear,
+    /// Break-in: a new tyre's grip deficit recovered with severe sliding.
+    BreakIn,
+    /// Transient relaxation of the slips.
+    Transient,
+    /// Inflation pressure (MF pressure coefficients).
+    Pressure,
+    /// Camber (MF camber coefficients).
+    Camber,
+    /// Belt speed: grip and stiffness.
+    Speed,
+    /// Load sensitivity (MF load coefficients).
+    Load,
+    /// Ply-steer / conicity offsets (MF shift coefficients).
+    Offset,
+}
+
+impl Effect {
+    /// Every effect, catalogue order.
+    pub const ALL: [Effect; 9] = [
+        Effect::Thermal,
+        Effect::Wear,
+        Effect::BreakIn,
+        Effect::Transient,
+        Effect::Pressure,
+        Effect::Camber,
+        Effect::Speed,
+        Effect::Load,
+        Effect::Offset,
+    ];
+
+    /// Name in `doctor.json` and the extension section.
+    pub fn name(self) -> &'static str {
+        match self {
+            Effect::Thermal => "thermal",
+            Effect::Wear => "wear",
+            Effect::BreakIn => "break_in",
+            Effect::Transient => "transient",
+            Effect::Pressure => "pressure",
+            Effect::Camber => "camber",
+            Effect::Speed => "speed",
+            Effect::Load => "load",
+            Effect::Offset => "offset",
+        }
+    }
+
+    /// Parses a name.
+    pub fn parse(s: &str) -> Option<Effect> {
+        Effect::ALL.into_iter().find(|e| e.name() == s)
+    }
+
+    /// The variable the effect's signature is plotted against, with its unit.
+    pub fn variable(self) -> (&'static str, &'static str) {
+        match self {
+            Effect::Thermal => ("grip temperature", "°C"),
+            Effect::Wear => ("sliding energy on the tyre", "MJ"),
+            Effect::BreakIn => ("sliding energy on the tyre", "MJ"),
+            Effect::Transient => ("slip-angle rate", "deg/s"),
+            Effect::Pressure => ("inflation pressure", "bar"),
+            Effect::Camber => ("camber", "deg"),
+            Effect::Speed => ("belt speed", "m/s"),
+            Effect::Load => ("vertical load", "kN"),
+            Effect::Offset => ("slip angle", "deg"),
+        }
+    }
+
+    /// True for effects MF-Tyre 6.1 models with its own coefficients (the candidate refits them).
+    pub fn is_refit(self) -> bool {
+        matches!(self, Effect::Pressure | Effect::Camber | Effect::Load | Effect::Offset)
+    }
+
+    /// The effect's variable at series sample `i`.
+    pub fn variable_value(self, ds: &Dataset, i: usize) -> f64 {
+        let s = &ds.series;
+        match self {
+            Effect::Thermal => s.temp_grip_c[i],
+            Effect::Wear | Effect::BreakIn => s.sliding_energy_j[i] * 1e-6,
+            Effect::Transient => s.alpha_rate_dps[i],
+            Effect::Pressure => s.p_pa[i] * 1e-5,
+            Effect::Camber => s.gamma_deg[i],
+            Effect::Speed => s.v_mps[i],
+            Effect::Load => s.fz_n[i] * 1e-3,
+            Effect::Offset => s.alpha_deg[i],
+        }
+    }
+}
+
+/// Break-in's power thresholds tried (a discrete choice, fitted on the training sweeps) [W].
+pub const BREAK_IN_THRESHOLDS_W: [f64; 4] = [0.0, 5_000.0, 10_000.0, 20_000.0];
+
+/// One parameter of an effect.
+#[derive(Debug, Clone, Serialize)]
+pub struct ParamSpec {
+    /// Key in the extension section or the `.tir` coefficient key (refits).
+    pub key: String,
+    /// Starting value.
+    pub init: f64,
+    /// Lower bound.
+    pub lower: f64,
+    /// Upper bound.
+    pub upper: f64,
+}
+
+fn ps(key: &str, init: f64, lower: f64, upper: f64) -> ParamSpec {
+    ParamSpec { key: key.to_owned(), init, lower, upper }
+}
+
+/// Why an effect cannot be tested on a dataset.
+pub fn untestable_reason(effect: Effect, ds: &Dataset) -> Option<String> {
+    let s = &ds.series;
+    match effect {
+        Effect::Thermal => {
+            let r = ds.point_range(&s.temp_grip_c);
+            (r < 3.0).then(|| format!("grip temperature spans only {r:.1} K"))
+        }
+        Effect::Pressure => {
+            let r = ds.point_range(&s.p_pa) * 1e-5;
+            (r < 0.15).then(|| format!("one inflation pressure only (range {r:.2} bar)"))
+        }
+        Effect::Camber => {
+            let r = ds.point_range(&s.gamma_deg);
+            (r < 1.0).then(|| format!("camber spans only {r:.2}°"))
+        }
+        Effect::Speed => {
+            let r = ds.point_range(&s.v_mps);
+            (r < 3.0).then(|| format!("speed spans only {r:.1} m/s"))
+        }
+        Effect::Load => {
+            let r = ds.point_range(&s.fz_n);
+            (r < 1000.0).then(|| format!("load spans only {r:.0} N"))
+        }
+        Effect::Wear | Effect::BreakIn => {
+            let r = ds.point_range(&s.sliding_energy_j) * 1e-6;
+            (r < 0.01).then(|| format!("sliding energy spans only {r:.3} MJ"))
+        }
+        Effect::Transient | Effect::Offset => None,
+    }
+}
+
+/// The parameters of `effect` on `ds` with base model `base`.
+pub fn param_specs(effect: Effect, ds: &Dataset, base: &TyreParams) -> Vec<ParamSpec> {
+    let lat = ds.has_lateral() || !ds.has_longitudinal();
+    let lon = ds.has_longitudinal();
+    let refit = |keys: &[&str], slack: f64| -> Vec<ParamSpec> {
+        keys.iter()
+            .filter_map(|k| base.get(k).map(|v| (k, v)))
+            .map(|(k, v)| {
+                let w = 2.0 * (v.abs() + slack);
+                ps(k, v, v - w, v + w)
+            })
+            .collect()
+    };
+    match effect {
+        Effect::Thermal => vec![
+            ps("THERMAL_MU0", 0.0, -0.5, 0.5),
+            ps("THERMAL_MU1", 0.0, -0.5, 0.5),
+            ps("THERMAL_MU2", 0.0, -0.5, 0.5),
+            ps("THERMAL_K0", 0.0, -0.5, 0.5),
+            ps("THERMAL_K1", 0.0, -0.5, 0.5),
+        ],
+        Effect::Wear => vec![
+            ps("WEAR_K_PER_MJ", 0.0, -2.0, 2.0),
+            ps("WEAR_C_PER_MJ", 0.0, -2.0, 2.0),
+            ps("WEAR_RL_MM_PER_MJ", 0.0, -20.0, 20.0),
+        ],
+        Effect::BreakIn => vec![ps("BREAKIN_DEFICIT", 0.02, -0.3, 0.6), ps("BREAKIN_LOG10_ENERGY_KJ", 2.0, -0.5, 5.0)],
+        Effect::Transient => {
+            let mut v = Vec::new();
+            if lat {
+                v.push(ps("TRANSIENT_SIGMA_Y0_M", 0.3, 0.002, 3.0));
+                v.push(ps("TRANSIENT_ALPHA_HALF_DEG", 3.0, 0.2, 30.0));
+            }
+            if lon {
+                v.push(ps("TRANSIENT_SIGMA_X0_M", 0.2, 0.002, 3.0));
+                v.push(ps("TRANSIENT_KAPPA_HALF", 0.03, 0.002, 0.5));
+            }
+            v
+        }
+        Effect::Speed => vec![ps("SPEED_MU1", 0.0, -0.5, 0.5), ps("SPEED_K1", 0.0, -0.5, 0.5)],
+        Effect::Pressure => {
+            let mut keys = vec!["PFZ1"];
+            if lat {
+                keys.extend(["PPY1", "PPY2", "PPY3", "PPY4", "PPZ1"]);
+            }
+            if lon {
+                keys.extend(["PPX1", "PPX2", "PPX3", "PPX4"]);
+            }
+            refit(&keys, 1.0)
+        }
+        Effect::Camber => {
+            let mut keys = vec![];
+            if lat {
+                keys.extend(["PKY6", "PDY3", "PVY3", "QHZ3"]);
+            }
+            if lon {
+                keys.push("PDX3");
+            }
+            refit(&keys, 1.0)
+        }
+        Effect::Load => {
+            let mut keys = vec![];
+            if lat {
+                keys.extend(["PDY2", "PKY2", "QBZ2"]);
+            }
+            if lon {
+                keys.extend(["PDX2", "PKX2"]);
+            }
+            refit(&keys, 1.0)
+        }
+        Effect::Offset => {
+            let mut keys = vec![];
+            if lat {
+                keys.extend(["PHY1", "PVY1", "QHZ1"]);
+            }
+            if lon {
+                keys.extend(["PHX1", "PVX1"]);
+            }
+            refit(&keys, 0.02)
+        }
+    }
+}
+
+/// One effect with parameter values (and break-in's threshold).
+#[derive(Debug, Clone, Serialize)]
+pub struct EffectParams {
+    /// The effect.
+    pub effect: Effect,
+    /// Parameter keys.
+    pub keys: Vec<String>,
+    /// Values, as `keys`.
+    pub values: Vec<f64>,
+    /// Break-in's severe-power threshold [W] (0 for other effects).
+    pub threshold_w: f64,
+}
+
+impl EffectParams {
+    fn get(&self, key: &str) -> f64 {
+        self.keys.iter().position(|k| k == key).map_or(0.0, |i| self.values[i])
+    }
+}
+
+/// Evaluates a base model with extensions at a dataset's points. Precomputes the state
+/// variables that do not depend on parameters.
+#[derive(Debug)]
+pub struct Evaluator<'a> {
+    /// The data.
+    pub ds: &'a Dataset,
+    /// The base model.
+    pub base: &'a TyreParams,
+    /// Reference temperature of the thermal extension (median grip temperature) [°C].
+    pub t_ref_c: f64,
+    /// Reference speed of the speed extension (LONGVL) [m/s].
+    pub v_ref_mps: f64,
+    severe: Vec<Vec<f64>>,
+}
+
+/// Per-point multipliers and input changes the extensions produce.
+#[derive(Debug, Clone, Copy)]
+struct PointMods {
+    mu: f64,
+    k: f64,
+    c: f64,
+    drl_m: f64,
+}
+
+impl<'a> Evaluator<'a> {
+    /// Prepares the evaluator.
+    pub fn new(ds: &'a Dataset, base: &'a TyreParams) -> Self {
+        let mut temps: Vec<f64> =
+            ds.points.iter().map(|&i| ds.series.temp_grip_c[i]).filter(|v| v.is_finite()).collect();
+        temps.sort_by(f64::total_cmp);
+        let t_ref_c = if temps.is_empty() { 25.0 } else { temps[temps.len() / 2] };
+        let severe = BREAK_IN_THRESHOLDS_W.iter().map(|&th| ds.series.severe_energy_j(th)).collect();
+        let v_ref_mps = if base.longvl_mps() > 0.0 { base.longvl_mps() } else { 16.6 };
+        Self { ds, base, t_ref_c, v_ref_mps, severe }
+    }
+
+    /// Relaxed slip angle and slip ratio series for the transient extension:
+    /// dα'/ds = (α − α')/σ(α'), σ(α') = σ0 / (1 + (α'/α½)²), likewise for κ.
+    pub fn relaxed(&self, e: &EffectParams) -> (Vec<f64>, Vec<f64>) {
+        let s = &self.ds.series;
+        let sy0 = e.get("TRANSIENT_SIGMA_Y0_M");
+        let ah = e.get("TRANSIENT_ALPHA_HALF_DEG").max(1e-3);
+        let sx0 = e.get("TRANSIENT_SIGMA_X0_M");
+        let kh = e.get("TRANSIENT_KAPPA_HALF").max(1e-5);
+        let n = s.len();
+        let mut a = s.alpha_deg.clone();
+        let mut k = s.kappa.clone();
+        for i in 1..n {
+            let dt = s.t_s[i] - s.t_s[i - 1];
+            if !(0.0..=0.5).contains(&dt) {
+                continue;
+            }
+            let ds_m = s.v_mps[i].max(0.0) * dt;
+            if sy0 > 0.0 {
+                let sig = sy0 / (1.0 + (a[i - 1] / ah).powi(2));
+                let g = 1.0 - (-ds_m / sig.max(1e-4)).exp();
+                a[i] = a[i - 1] + g * (s.alpha_deg[i] - a[i - 1]);
+            }
+            if sx0 > 0.0 {
+                let sig = sx0 / (1.0 + (k[i - 1] / kh).powi(2));
+                let g = 1.0 - (-ds_m / sig.max(1e-4)).exp();
+                k[i] = k[i - 1] + g * (s.kappa[i] - k[i - 1]);
+            }
+        }
+        (a, k)
+    }
+
+    /// Predictions [FX, FYW, MZW, DSTWOWHC] at the point ordinals `which` with `effects`.
+    pub fn predict(&self, effects: &[EffectParams], which: &[usize]) -> Vec<[f64; 4]> {
+        let s = &self.ds.series;
+        let mut params = self.base.clone();
+        for e in effects.iter().filter(|e| e.effect.is_refit()) {
+            for (k, v) in e.keys.iter().zip(&e.values) {
+                // Keys come from `param_specs`, which only lists keys the base has.
+                let _ = params.set(k, *v);
+            }
+        }
+        let relaxed = effects.iter().find(|e| e.effect == Effect::Transient).map(|e| self.relaxed(e));
+        which
+            .iter()
+            .map(|&kpt| {
+                let i = self.ds.points[kpt];
+                let m = self.mods(effects, i);
+                let mut sc = params.scaling;
+                sc.lmux *= m.mu;
+                sc.lmuy *= m.mu;
+                sc.lkx *= m.k;
+                sc.lky *= m.k;
+                sc.lcx *= m.c;
+                sc.lcy *= m.c;
+                let (alpha_deg, kappa) = match &relaxed {
+                    Some((a, k)) => (a[i], k[i]),
+                    None => (s.alpha_deg[i], s.kappa[i]),
+                };
+                let input = MfInput {
+                    fz_n: s.fz_n[i].max(0.0),
+                    kappa,
+                    alpha_rad: alpha_deg.to_radians(),
+                    gamma_rad: s.gamma_deg[i].to_radians(),
+                    phit_per_m: 0.0,
+                    vx_mps: s.v_mps[i],
+                    p_pa: s.p_pa[i],
+                    omega_radps: s.omega_radps[i].max(0.0),
+                };
+                let o = evaluate_scaled(&params, &sc, UseMode::M111, &input);
+                [o.fx_n, o.fy_n, o.mz_nm, o.rl_m + m.drl_m]
+            })
+            .collect()
+    }
+
+    fn mods(&self, effects: &[EffectParams], i: usize) -> PointMods {
+        let s = &self.ds.series;
+        let mut m = PointMods { mu: 1.0, k: 1.0, c: 1.0, drl_m: 0.0 };
+        for e in effects {
+            match e.effect {
+                Effect::Thermal => {
+                    let t = s.temp_grip_c[i];
+                    let x = if t.is_finite() { (t - self.t_ref_c) / 10.0 } else { 0.0 };
+                    m.mu *= (1.0 + e.values[0] + e.values[1] * x + e.values[2] * x * x).max(0.2);
+                    m.k *= (1.0 + e.values[3] + e.values[4] * x).max(0.2);
+                }
+                Effect::Wear => {
+                    let x = s.sliding_energy_j[i] * 1e-6;
+                    m.k *= (1.0 + e.values[0] * x).max(0.2);
+                    m.c *= (1.0 + e.values[1] * x).max(0.2);
+                    m.drl_m -= e.values[2] * x * 1e-3;
+                }
+                Effect::BreakIn => {
+                    let ti = BREAK_IN_THRESHOLDS_W.iter().position(|&t| t == e.threshold_w).unwrap_or(0);
+                    let ekj = self.severe[ti][i] * 1e-3;
+                    let e0 = 10f64.powf(e.values[1]);
+                    m.mu *= (1.0 - e.values[0] * (-ekj / e0).exp()).max(0.2);
+                }
+                Effect::Speed => {
+                    let x = (s.v_mps[i] - self.v_ref_mps) / self.v_ref_mps;
+                    m.mu *= (1.0 + e.values[0] * x).max(0.2);
+                    m.k *= (1.0 + e.values[1] * x).max(0.2);
+                }
+                Effect::Transient | Effect::Pressure | Effect::Camber | Effect::Load | Effect::Offset => {}
+            }
+        }
+        m
+    }
+}

@@ -1,0 +1,204 @@
+//! Residuals, the noise floor, fitting extensions (bounded Levenberg–Marquardt) and
+//! cross-validated scoring on held-out sweeps.
+
+use crate::effects::{BREAK_IN_THRESHOLDS_W, CH_FX, CH_FY, CH_MZ, CH_RL, Effect, EffectParams, Evaluator, ParamSpec};
+use lsq::{Options, Problem, solve};
+use nalgebra::DVector;
+
+/// Measured [FX, FYW, MZW, DSTWOWHC] at every point (NaN where invalid).
+pub fn measured(ev: &Evaluator<'_>) -> Vec<[f64; 4]> {
+    let s = &ev.ds.series;
+    ev.ds.points.iter().map(|&i| [s.fx_n[i], s.fy_n[i], s.mz_nm[i], s.rl_m[i]]).collect()
+}
+
+/// Robust noise floor per channel from the data itself: the second difference of the base
+/// model's residual along each sweep, d = r_k − (r_{k−1} + r_{k+1})/2, removes everything that
+/// varies smoothly over the test (the effects being looked for) and keeps the point-to-point
+/// scatter (sensor noise and the noise of the measured inputs propagated through the model);
+/// σ = 1.4826·MAD(d)/√1.5. DSTWOWHC is floored at its 0.1 mm quantisation (0.1/√12 mm), where
+/// the median difference is often exactly zero.
+pub fn noise_floor(ev: &Evaluator<'_>, meas: &[[f64; 4]], pred: &[[f64; 4]]) -> [f64; 4] {
+    let n = meas.len();
+    let mut out = [0.0; 4];
+    for (ch, o) in out.iter_mut().enumerate() {
+        let mut d = Vec::new();
+        for k in 1..n.saturating_sub(1) {
+            let (a, b, c) = (k - 1, k, k + 1);
+            if ev.ds.point_sweep(a) != ev.ds.point_sweep(b) || ev.ds.point_sweep(c) != ev.ds.point_sweep(b) {
+                continue;
+            }
+            let r = |j: usize| meas[j][ch] - pred[j][ch];
+            let v = r(b) - 0.5 * (r(a) + r(c));
+            if v.is_finite() {
+                d.push(v.abs());
+            }
+        }
+        let floor = match ch {
+            CH_RL => 0.1e-3 / 12f64.sqrt(),
+            CH_FX | CH_FY => 1.0,
+            CH_MZ => 0.05,
+            _ => 1e-9,
+        };
+        *o = if d.is_empty() {
+            floor
+        } else {
+            d.sort_by(f64::total_cmp);
+            (1.4826 * d[d.len() / 2] / 1.5f64.sqrt()).max(floor)
+        };
+    }
+    out
+}
+
+/// χ² of predictions against measurements over `which` (points), per channel.
+pub fn chi2(meas: &[[f64; 4]], pred: &[[f64; 4]], sigma: &[f64; 4], which: &[usize]) -> [f64; 4] {
+    let mut c = [0.0; 4];
+    for &k in which {
+        for ch in 0..4 {
+            let r = (meas[k][ch] - pred[k][ch]) / sigma[ch];
+            if r.is_finite() {
+                c[ch] += r * r;
+            }
+        }
+    }
+    c
+}
+
+/// Number of finite residuals over `which`.
+pub fn count_valid(meas: &[[f64; 4]], which: &[usize]) -> usize {
+    which.iter().map(|&k| meas[k].iter().filter(|v| v.is_finite()).count()).sum()
+}
+
+/// One effect of a fit: its parameter specs.
+#[derive(Debug, Clone)]
+pub struct FitSpec {
+    /// The effect.
+    pub effect: Effect,
+    /// Its parameters.
+    pub params: Vec<ParamSpec>,
+}
+
+struct FitProblem<'e, 'a> {
+    ev: &'e Evaluator<'a>,
+    specs: &'e [FitSpec],
+    thresholds: Vec<f64>,
+    train: &'e [usize],
+    meas: &'e [[f64; 4]],
+    sigma: [f64; 4],
+}
+
+impl FitProblem<'_, '_> {
+    fn unpack(&self, p: &DVector<f64>) -> Vec<EffectParams> {
+        let mut at = 0;
+        self.specs
+            .iter()
+            .zip(&self.thresholds)
+            .map(|(s, &th)| {
+                let n = s.params.len();
+                let e = EffectParams {
+                    effect: s.effect,
+                    keys: s.params.iter().map(|p| p.key.clone()).collect(),
+                    values: p.as_slice()[at..at + n].to_vec(),
+                    threshold_w: th,
+                };
+                at += n;
+                e
+            })
+            .collect()
+    }
+}
+
+impl Problem for FitProblem<'_, '_> {
+    fn num_residuals(&self) -> usize {
+        4 * self.train.len()
+    }
+
+    fn residuals(&self, p: &DVector<f64>, r: &mut DVector<f64>) {
+        let effects = self.unpack(p);
+        let pred = self.ev.predict(&effects, self.train);
+        for (j, (&k, pr)) in self.train.iter().zip(&pred).enumerate() {
+            for ch in 0..4 {
+                let v = (self.meas[k][ch] - pr[ch]) / self.sigma[ch];
+                r[4 * j + ch] = if self.meas[k][ch].is_finite() { v } else { 0.0 };
+            }
+        }
+    }
+}
+
+/// Fit settings.
+#[derive(Debug, Clone, Copy)]
+pub struct FitOptions {
+    /// Levenberg–Marquardt iterations per fit.
+    pub max_iterations: usize,
+}
+
+impl Default for FitOptions {
+    fn default() -> Self {
+        Self { max_iterations: 25 }
+    }
+}
+
+/// Fits the parameters of `specs` jointly on the points `train` (break-in's threshold by
+/// trying each of [`BREAK_IN_THRESHOLDS_W`]). Returns the fitted effects and the cost ½χ².
+pub fn fit_effects(
+    ev: &Evaluator<'_>,
+    specs: &[FitSpec],
+    train: &[usize],
+    meas: &[[f64; 4]],
+    sigma: [f64; 4],
+    opt: FitOptions,
+) -> (Vec<EffectParams>, f64) {
+    let has_break_in = specs.iter().any(|s| s.effect == Effect::BreakIn);
+    let grid: Vec<f64> = if has_break_in { BREAK_IN_THRESHOLDS_W.to_vec() } else { vec![0.0] };
+    let p0 = DVector::from_iterator(
+        specs.iter().map(|s| s.params.len()).sum(),
+        specs.iter().flat_map(|s| s.params.iter().map(|p| p.init)),
+    );
+    let lo = DVector::from_iterator(p0.len(), specs.iter().flat_map(|s| s.params.iter().map(|p| p.lower)));
+    let up = DVector::from_iterator(p0.len(), specs.iter().flat_map(|s| s.params.iter().map(|p| p.upper)));
+    let mut best: Option<(Vec<EffectParams>, f64)> = None;
+    for th in grid {
+        let thresholds = specs.iter().map(|s| if s.effect == Effect::BreakIn { th } else { 0.0 }).collect();
+        let prob = FitProblem { ev, specs, thresholds, train, meas, sigma };
+        let options = Options::default().max_iterations(opt.max_iterations).bounds(lo.clone(), up.clone());
+        let (params, cost) = match solve(&prob, p0.clone(), &options) {
+            Ok(rep) => (rep.params, rep.cost),
+            // Only invalid input (empty data) errors; keep the start, which is "no effect".
+            Err(_) => (p0.clone(), f64::INFINITY),
+        };
+        if best.as_ref().is_none_or(|b| cost < b.1) {
+            best = Some((prob.unpack(&params), cost));
+        }
+    }
+    best.unwrap_or_default()
+}
+
+/// Held-out folds: sweep ordinal modulo `k`.
+pub fn folds(ev: &Evaluator<'_>, k: usize) -> Vec<Vec<usize>> {
+    let mut f = vec![Vec::new(); k];
+    for p in 0..ev.ds.len() {
+        f[ev.ds.point_sweep(p) % k].push(p);
+    }
+    f.retain(|v| !v.is_empty());
+    f
+}
+
+/// Cross-validated predictions: every point predicted by the fit that did not see its sweep.
+pub fn cross_validate(
+    ev: &Evaluator<'_>,
+    specs: &[FitSpec],
+    folds: &[Vec<usize>],
+    meas: &[[f64; 4]],
+    sigma: [f64; 4],
+    opt: FitOptions,
+) -> Vec<[f64; 4]> {
+    let mut out = vec![[f64::NAN; 4]; ev.ds.len()];
+    for (fi, test) in folds.iter().enumerate() {
+        let train: Vec<usize> =
+            folds.iter().enumerate().filter(|(j, _)| *j != fi).flat_map(|(_, v)| v.iter().copied()).collect();
+        let (fitted, _) = fit_effects(ev, specs, &train, meas, sigma, opt);
+        for (k, p) in test.iter().zip(ev.predict(&fitted, test)) {
+            out[*k] = p;
+        }
+    }
+    out
+}
