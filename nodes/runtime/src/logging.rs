@@ -7,7 +7,7 @@
 use tracing_subscriber::{EnvFilter, fmt};
 
 /// Default filter: our crates at info, the DDS stack quiet.
-pub const DEFAULT_FILTER: &str = "info,rustdds=error,ros2_client=error,mio=error";
+pub const DEFAULT_FILTER: &str = "info,rustdds=error,rustdds::dds::pubsub=off,ros2_client=error,mio=error";
 
 /// Installs the global subscriber (idempotent: a second call is a no-op). Logs go to stderr so
 /// that stdout stays free for a command's real output (tables, JSON).

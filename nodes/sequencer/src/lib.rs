@@ -15,6 +15,8 @@
 
 pub mod config;
 pub mod core;
+#[cfg(feature = "dds")]
+pub mod shell;
 
 pub use config::SequencerConfig;
 pub use core::{Checkpoint, CommandRejected, Sequencer, SequencerError, SequencerEvent, SequencerOutput};

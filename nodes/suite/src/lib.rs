@@ -15,4 +15,4 @@ pub mod summary;
 pub use headless::{Headless, HeadlessError};
 pub use sink::{McapSink, MessageSink, NullSink};
 pub use spec::{ProcedureChoice, RunSpec};
-pub use summary::{Alarm, ProcedureTimes, RunSummary};
+pub use summary::{Alarm, ProcedureTimes, RunSummary, summary_from_log};

@@ -137,7 +137,7 @@ impl SummaryBuilder {
         Self { summary: RunSummary { procedure: procedure.to_owned(), ..Default::default() }, ..Default::default() }
     }
 
-    fn entry(&mut self, name: &str) -> &mut ProcedureTimes {
+    pub(crate) fn entry(&mut self, name: &str) -> &mut ProcedureTimes {
         if let Some(i) = self.summary.procedures.iter().position(|p| p.name == name) {
             return &mut self.summary.procedures[i];
         }
@@ -198,4 +198,77 @@ impl SummaryBuilder {
     pub fn alarm(&mut self, level: &str, check: &str, message: String, rig_time_s: f64) {
         self.summary.alarms.push(Alarm { level: level.to_owned(), check: check.to_owned(), message, rig_time_s });
     }
+}
+
+/// Why a log could not be summarised.
+#[derive(Debug, thiserror::Error)]
+#[error("{0}")]
+pub struct LogSummaryError(pub String);
+
+/// Summarises a recorded run from its `procedure/state`, `thermal/state` and `/diagnostics`
+/// topics alone, so it works for any log: a DDS run, a headless one, a real rig's.
+/// Resolution is the state's publishing period (on change, at least 2 Hz).
+pub fn summary_from_log(log: &mcaplog::LogReader, namespace: &str) -> Result<RunSummary, LogSummaryError> {
+    use tyre_msgs::{ProcedureState as PS, ThermalState as TS, diagnostic_msgs::DiagnosticArray};
+    let ns = namespace.trim_end_matches('/');
+    let err = |e: mcaplog::LogError| LogSummaryError(e.to_string());
+    let states = log.typed::<PS>(&format!("{ns}/{}", tyre_msgs::topics::PROCEDURE_STATE)).map_err(err)?;
+    let thermal = log.typed::<TS>(&format!("{ns}/{}", tyre_msgs::topics::THERMAL_STATE)).map_err(err)?;
+    let diags = log.typed::<DiagnosticArray>(tyre_msgs::topics::DIAGNOSTICS).map_err(err)?;
+    let mut b =
+        SummaryBuilder::new(log.metadata().get("procedure").and_then(|m| m.get("name")).map_or("", |s| s.as_str()));
+    let mut prev: Option<&PS> = None;
+    let mut seen_sweeps = std::collections::BTreeSet::new();
+    for (_, st) in &states {
+        if let Some(p) = prev {
+            let dt = st.header.stamp.as_secs_f64() - p.header.stamp.as_secs_f64();
+            b.on_state(p);
+            if dt > 0.0 && p.phase != PS::PHASE_IDLE && p.phase != PS::PHASE_COMPLETE {
+                b.add_time(dt);
+                let name = p.procedure.clone();
+                if p.phase == PS::PHASE_THERMAL_PAUSE {
+                    b.entry(&name).thermal_pause_s += dt;
+                } else if p.phase == PS::PHASE_SWEEP {
+                    b.entry(&name).sweep_time_s += dt;
+                }
+            }
+            if st.phase == PS::PHASE_TYRE_CHANGE && p.phase != PS::PHASE_TYRE_CHANGE {
+                b.summary.tyre_changes += 1;
+            }
+        } else if st.phase == PS::PHASE_TYRE_CHANGE {
+            b.summary.tyre_changes += 1;
+        }
+        if st.phase == PS::PHASE_SWEEP && seen_sweeps.insert((st.procedure.clone(), st.sweep_index)) {
+            b.entry(&st.procedure.clone()).sweeps += 1;
+            b.summary.sweeps += 1;
+        }
+        if b.summary.procedure.is_empty() && !st.procedure.is_empty() {
+            b.summary.procedure = st.procedure.clone();
+        }
+        prev = Some(st);
+    }
+    if let Some(last) = prev {
+        b.summary.completed = last.phase == PS::PHASE_COMPLETE;
+    }
+    let mut was_timed_out = false;
+    for (_, th) in &thermal {
+        let timed_out = th.status == TS::STATUS_TIMED_OUT;
+        if timed_out && !was_timed_out {
+            b.summary.timeouts += 1;
+        }
+        was_timed_out = timed_out;
+    }
+    for (_, d) in &diags {
+        for s in &d.status {
+            let level = match s.level {
+                tyre_msgs::diagnostic_msgs::DiagnosticStatus::WARN => "WARN",
+                tyre_msgs::diagnostic_msgs::DiagnosticStatus::ERROR => "ERROR",
+                _ => continue,
+            };
+            let check = s.name.rsplit(": ").next().unwrap_or(&s.name).to_owned();
+            b.alarm(level, &check, s.message.clone(), d.header.stamp.as_secs_f64());
+        }
+    }
+    b.summary.tyres_used = b.summary.tyre_changes.max(1);
+    Ok(b.summary)
 }

@@ -44,3 +44,29 @@ fn gs2mf_takes_at_most_27_percent_of_square_matrix_rig_time() {
     assert_eq!(sm.tyres_used, 10);
     assert!(ratio <= 0.27, "GS2MF {:.0} s vs Square Matrix {:.0} s", g.total_rig_time_s, sm.total_rig_time_s);
 }
+
+/// The summary computed from a recorded log (what a DDS run or a real rig's log gets) agrees
+/// with the one built from the cores' events during the run.
+#[test]
+fn summary_from_the_log_matches_the_live_summary() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let path = dir.path().join("staticlong.mcap");
+    let spec = RunSpec::new(&launch_config(), ProcedureChoice::StaticLong);
+    let mut h = Headless::new(&spec, thermal::ThermalConfig::default(), sequencer::SequencerConfig::default())
+        .expect("headless");
+    let mut sink = suite::McapSink::create(&path, "/rig", &h.metadata(&spec)).expect("log");
+    let live = h.run(&mut sink, &mut |_, _| {}).expect("run");
+    sink.finish().expect("finish");
+    let log = mcaplog::LogReader::open(&path).expect("read back");
+    let from_log = suite::summary_from_log(&log, "/rig").expect("summary");
+    println!("live\n{}\nfrom log\n{}", live.table(), from_log.table());
+    assert!(from_log.completed);
+    assert_eq!(from_log.sweeps, live.sweeps);
+    assert_eq!(from_log.timeouts, live.timeouts);
+    assert!(
+        (from_log.total_rig_time_s - live.total_rig_time_s).abs() < 1.0,
+        "{} vs {}",
+        from_log.total_rig_time_s,
+        live.total_rig_time_s
+    );
+}

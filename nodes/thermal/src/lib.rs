@@ -71,6 +71,8 @@
 
 pub mod config;
 pub mod core;
+#[cfg(feature = "dds")]
+pub mod shell;
 
 pub use crate::config::{
     ConfigError, CoolingConfig, SpikeFilterConfig, StuckConfig, TempWeights, ThermalConfig, WarmUpConfig,

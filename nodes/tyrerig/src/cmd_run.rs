@@ -59,6 +59,9 @@ pub fn spec_of(args: &RunArgs) -> RunSpec {
 }
 
 pub fn run(args: RunArgs) -> anyhow::Result<()> {
+    if !args.headless {
+        return run_dds(&args);
+    }
     let spec = spec_of(&args);
     let wall = std::time::Instant::now();
     let mut headless = Headless::new(&spec, thermal::ThermalConfig::default(), sequencer::SequencerConfig::default())?;
@@ -99,12 +102,142 @@ pub fn run(args: RunArgs) -> anyhow::Result<()> {
             println!("  {:>8.1} s  {:<5} {:<16} {}", a.rig_time_s, a.level, a.check, a.message);
         }
     }
+    write_summary_json(&args, &summary, wall_s)?;
+    if !summary.completed {
+        anyhow::bail!("the procedure did not complete");
+    }
+    Ok(())
+}
+
+fn write_summary_json(args: &RunArgs, summary: &suite::RunSummary, wall_s: f64) -> anyhow::Result<()> {
     if let Some(path) = &args.summary_json {
-        let mut json = serde_json::to_value(&summary)?;
+        let mut json = serde_json::to_value(summary)?;
         json["wall_time_s"] = serde_json::json!(wall_s);
         json["log"] = serde_json::json!(args.out.display().to_string());
         std::fs::write(path, serde_json::to_string_pretty(&json)?).with_context(|| format!("{}", path.display()))?;
     }
+    Ok(())
+}
+
+fn table(entries: &[(&str, toml::Value)]) -> toml::Table {
+    entries.iter().map(|(k, v)| ((*k).to_owned(), v.clone())).collect()
+}
+
+fn path_value(p: &std::path::Path) -> anyhow::Result<toml::Value> {
+    let abs = std::path::absolute(p).with_context(|| format!("{}: cannot resolve", p.display()))?;
+    Ok(toml::Value::String(abs.display().to_string()))
+}
+
+/// The suite over DDS: virtual rig (lockstep clock), thermal gate, sequencer and recorder, each
+/// its own participant in this process; the summary is computed from the recorded log.
+fn run_dds(args: &RunArgs) -> anyhow::Result<()> {
+    use crate::launch::{NodeEntry, run_node};
+    use node_runtime::{RosNode, RuntimeConfig, Shutdown, SuiteTopic};
+    use toml::Value as V;
+
+    let spec = spec_of(args);
+    // The headless suite validates every input and gives the metadata the log carries.
+    let headless = Headless::new(&spec, thermal::ThermalConfig::default(), sequencer::SequencerConfig::default())?;
+    let metadata = headless.metadata(&spec);
+    let planned = headless.plan().estimate_total_s(&procedure::PauseModel::default());
+    drop(headless);
+
+    let mut rig = vec![
+        ("rig_config", path_value(&spec.rig_config)?),
+        ("seed", V::Integer(spec.seed as i64)),
+        ("clock", V::String("lockstep".into())),
+    ];
+    if let Some(t) = &spec.tyre {
+        rig.push(("tyre", path_value(t)?));
+    }
+    if let Some(e) = &spec.effects {
+        rig.push(("effects", V::String(e.clone())));
+    }
+    let sequencer = vec![
+        ("procedure", path_value(&spec.procedure_file)?),
+        ("load_index", V::Integer(i64::from(spec.inputs.load_index))),
+        ("sweeps", V::String(format!("{:?}", spec.inputs.sweeps).to_lowercase())),
+        ("autostart", V::Boolean(true)),
+        ("exit_when_done", V::Boolean(true)),
+    ];
+    let md: toml::Table = metadata
+        .iter()
+        .map(|(k, m)| (k.clone(), V::Table(m.iter().map(|(a, b)| (a.clone(), V::String(b.clone()))).collect())))
+        .collect();
+    let recorder = vec![("output", path_value(&args.out)?), ("metadata", V::Table(md))];
+    let nodes = [
+        NodeEntry { name: "recorder".into(), kind: "recorder".into(), config: table(&recorder) },
+        NodeEntry { name: "thermal".into(), kind: "thermal".into(), config: toml::Table::new() },
+        NodeEntry { name: "sequencer".into(), kind: "sequencer".into(), config: table(&sequencer) },
+        NodeEntry { name: "virtual_rig".into(), kind: "virtual_rig".into(), config: table(&rig) },
+    ];
+    let runtime = RuntimeConfig::default();
+    let wall = std::time::Instant::now();
+    let rt = tokio::runtime::Builder::new_multi_thread().enable_all().build()?;
+    let bar = if args.quiet { indicatif::ProgressBar::hidden() } else { indicatif::ProgressBar::new(1000) };
+    bar.set_style(
+        indicatif::ProgressStyle::with_template("{prefix} {bar:40.cyan/blue} {percent:>3}% rig {msg} eta {eta}")
+            .unwrap_or_else(|_| indicatif::ProgressStyle::default_bar()),
+    );
+    bar.set_prefix(format!("{} over DDS (planned ~{planned:.0} s rig time)", args.procedure.name()));
+    rt.block_on(async {
+        let shutdown = Shutdown::new();
+        shutdown.on_signals()?;
+        let mut tasks = tokio::task::JoinSet::new();
+        for entry in nodes {
+            let (rt_cfg, sd) = (runtime.clone(), shutdown.clone());
+            tasks.spawn(async move {
+                let r = run_node(&entry, &rt_cfg, sd).await;
+                (entry.name, r)
+            });
+        }
+        // Watch the procedure like a control room would, and end the run when it ends.
+        let mut watcher = RosNode::new("run_watcher", &runtime)?;
+        let states = watcher.subscription::<tyre_msgs::ProcedureState>(SuiteTopic::ProcedureState)?;
+        let watch = async {
+            use tyre_msgs::ProcedureState as PS;
+            loop {
+                let Ok((st, _)) = states.async_take().await else { continue };
+                bar.set_position((st.progress.clamp(0.0, 1.0) * 1000.0) as u64);
+                bar.set_message(format!("{:.0} s", st.elapsed_rig_time_s));
+                if matches!(st.phase, PS::PHASE_COMPLETE | PS::PHASE_ABORTED | PS::PHASE_ESTOP) {
+                    return st.phase;
+                }
+            }
+        };
+        tokio::select! {
+            _ = shutdown.wait() => {}
+            phase = watch => {
+                tracing::info!(phase, "procedure ended; stopping the suite");
+                // Let the last messages reach the recorder.
+                tokio::time::sleep(std::time::Duration::from_secs(1)).await;
+                shutdown.trigger();
+            }
+        }
+        while let Some(done) = tasks.join_next().await {
+            if let Ok((name, Err(e))) = done {
+                anyhow::bail!("node {name}: {e:#}");
+            }
+        }
+        anyhow::Ok(())
+    })?;
+    bar.finish_and_clear();
+    let wall_s = wall.elapsed().as_secs_f64();
+    let log = mcaplog::LogReader::open(&args.out)?;
+    let summary = suite::summary_from_log(&log, "/rig")?;
+    println!("{}", summary.table());
+    println!(
+        "log: {} ({} messages); rig time {:.0} s in {:.1} s wall = {:.1}x real time (DDS, lockstep)",
+        args.out.display(),
+        log.messages().len(),
+        summary.total_rig_time_s,
+        wall_s,
+        summary.total_rig_time_s / wall_s.max(1e-9)
+    );
+    for a in &summary.alarms {
+        println!("  {:>8.1} s  {:<5} {:<16} {}", a.rig_time_s, a.level, a.check, a.message);
+    }
+    write_summary_json(args, &summary, wall_s)?;
     if !summary.completed {
         anyhow::bail!("the procedure did not complete");
     }

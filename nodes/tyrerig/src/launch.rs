@@ -44,15 +44,22 @@ pub struct NodeEntry {
 pub enum NodeKind {
     Recorder,
     TestPattern,
+    VirtualRig,
+    Thermal,
+    Sequencer,
 }
 
 impl NodeKind {
-    pub const ALL: [NodeKind; 2] = [NodeKind::Recorder, NodeKind::TestPattern];
+    pub const ALL: [NodeKind; 5] =
+        [NodeKind::Recorder, NodeKind::TestPattern, NodeKind::VirtualRig, NodeKind::Thermal, NodeKind::Sequencer];
 
     pub fn name(self) -> &'static str {
         match self {
             NodeKind::Recorder => "recorder",
             NodeKind::TestPattern => "test_pattern",
+            NodeKind::VirtualRig => "virtual_rig",
+            NodeKind::Thermal => "thermal",
+            NodeKind::Sequencer => "sequencer",
         }
     }
 
@@ -123,6 +130,17 @@ fn typed_config_check(entry: &NodeEntry) -> anyhow::Result<()> {
         Some(NodeKind::TestPattern) => {
             let _: test_pattern::TestPatternConfig = config_of(entry)?;
         }
+        Some(NodeKind::VirtualRig) => {
+            let _: virtual_rig::VirtualRigNodeConfig = config_of(entry)?;
+        }
+        Some(NodeKind::Thermal) => {
+            let c: thermal::ThermalConfig = config_of(entry)?;
+            c.validate()?;
+        }
+        Some(NodeKind::Sequencer) => {
+            let c: sequencer::shell::SequencerNodeConfig = config_of(entry)?;
+            c.core.validate()?;
+        }
         None => bail!("unknown node kind {:?}", entry.kind),
     }
     Ok(())
@@ -141,6 +159,22 @@ pub async fn run_node(entry: &NodeEntry, runtime: &RuntimeConfig, shutdown: Shut
         Some(NodeKind::TestPattern) => {
             let c: test_pattern::TestPatternConfig = config_of(entry)?;
             test_pattern::run(node, c, shutdown).await?;
+        }
+        Some(NodeKind::VirtualRig) => {
+            let mut c: virtual_rig::VirtualRigNodeConfig = config_of(entry)?;
+            c.rig_config = resolve(entry, &c.rig_config);
+            c.tyre = c.tyre.map(|t| resolve(entry, &t));
+            virtual_rig::run(node, c, shutdown).await?;
+        }
+        Some(NodeKind::Thermal) => {
+            let c: thermal::ThermalConfig = config_of(entry)?;
+            thermal::shell::run(node, c, shutdown).await?;
+        }
+        Some(NodeKind::Sequencer) => {
+            let mut c: sequencer::shell::SequencerNodeConfig = config_of(entry)?;
+            c.procedure = resolve(entry, &c.procedure);
+            c.checkpoint = c.checkpoint.map(|p| resolve(entry, &p));
+            sequencer::shell::run(node, c, shutdown).await?;
         }
         None => bail!("unknown node kind {:?}", entry.kind),
     }
