@@ -22,8 +22,11 @@ pub const TEMPLATE_TIR: &str = include_str!("template.tir");
 /// Options of a staged fit.
 #[derive(Debug, Clone)]
 pub struct FitOptions {
-    /// Resampling period for force & moment data, s (the thesis fits at 10 Hz).
+    /// Resampling period for free-rolling data, s (the thesis fits at 10 Hz).
     pub resample_period_s: f64,
+    /// Resampling period for BrkDrv data, s. Finer than 10 Hz: a slip-ratio sweep crosses 6 %
+    /// slip per 0.1 s at its high rate, and averaging across the peak would flatten it.
+    pub brkdrv_period_s: f64,
     /// Also fit the graph sweeps (drift/wear checks; off by default, as in the thesis).
     pub include_graph_sweeps: bool,
     /// Robust (soft-L1) loss threshold in % of the channel's peak; `None` = least squares.
@@ -44,6 +47,7 @@ impl Default for FitOptions {
     fn default() -> Self {
         Self {
             resample_period_s: 0.1,
+            brkdrv_period_s: 0.02,
             include_graph_sweeps: false,
             robust_pct: None,
             max_points: 3000,
@@ -163,7 +167,7 @@ fn points(
     let mut out = Vec::new();
     for seg in ctx.data.segments.iter().filter(|s| keep_seg(s)) {
         let free = seg.procedure == Procedure::FreeRolling;
-        let rs = resample(&seg.samples, ctx.opts.resample_period_s);
+        let rs = resample(&seg.samples, period_of(ctx, seg));
         for s in rs.iter().filter(|s| keep(s) && s.fz_n > 50.0) {
             let m = measured(s);
             if m.is_finite() {
@@ -172,6 +176,10 @@ fn points(
         }
     }
     decimate(out, max)
+}
+
+fn period_of(ctx: &Ctx, seg: &Segment) -> f64 {
+    if seg.procedure == Procedure::BrkDrv { ctx.opts.brkdrv_period_s } else { ctx.opts.resample_period_s }
 }
 
 fn decimate(v: Vec<Point>, max: usize) -> Vec<Point> {
@@ -457,7 +465,7 @@ fn split_segments_points(
         .filter(|s| keep_seg(s))
         .map(|seg| {
             let free = seg.procedure == Procedure::FreeRolling;
-            resample(&seg.samples, ctx.opts.resample_period_s)
+            resample(&seg.samples, period_of(ctx, seg))
                 .iter()
                 .filter(|s| s.fz_n > 50.0)
                 .map(|s| Point { input: input_of(s, free), measured: measured(s) })
@@ -875,6 +883,7 @@ fn stage_relaxation(ctx: &Ctx, params: &mut TyreParams, rep: &mut StageReport) -
         }
     }
     let mut cx_pts = Vec::new();
+    let static_tests = ctx.data.segments.iter().filter(|s| s.kind == DataKind::StaticLong).count();
     for seg in ctx.data.segments.iter().filter(|s| s.kind == DataKind::StaticLong) {
         if let Some((cx, s)) = static_stiffness(&seg.samples) {
             let input = MfInput {
@@ -889,7 +898,10 @@ fn stage_relaxation(ctx: &Ctx, params: &mut TyreParams, rep: &mut StageReport) -
         }
     }
     if sigma_pts.is_empty() && cx_pts.is_empty() {
-        return Err(FitError::NotEnoughData { stage: "relaxation".into(), points: 0, needed: 2 });
+        rep.skipped = Some(format!(
+            "no usable step-steer or static longitudinal tests ({static_tests} static tests without resolved belt travel)"
+        ));
+        return Ok(None);
     }
     if cx_pts.len() >= 2 {
         let mean = cx_pts.iter().map(|p| p.measured).sum::<f64>() / cx_pts.len() as f64;
@@ -912,7 +924,13 @@ fn stage_relaxation(ctx: &Ctx, params: &mut TyreParams, rep: &mut StageReport) -
             sx.iter().copied().fold(f64::NEG_INFINITY, f64::max)
         ));
     } else {
-        rep.notes.push("no static longitudinal data: LONGITUDINAL_STIFFNESS keeps the template value".into());
+        rep.notes.push(if static_tests > 0 {
+            format!(
+                "{static_tests} static longitudinal tests, but the belt is not seen moving in TRAJVELW during the drag, so LONGDISP is unknown: LONGITUDINAL_STIFFNESS keeps the template value"
+            )
+        } else {
+            "no static longitudinal data: LONGITUDINAL_STIFFNESS keeps the template value".into()
+        });
     }
     if sigma_pts.len() >= 2 {
         // Cy = Kyα/σy point by point for the start.
@@ -946,15 +964,24 @@ fn stage_relaxation(ctx: &Ctx, params: &mut TyreParams, rep: &mut StageReport) -
 }
 
 /// Lateral relaxation length of one step-steer test and the mean rolling sample.
+///
+/// The test rolls at zero slip, stops, steers at standstill and rolls again holding the slip
+/// angle; only the roll after the last standstill counts (the segment may begin with the
+/// previous test's steer-back).
 pub fn step_steer_length(samples: &[Sample]) -> Option<(f64, Sample)> {
-    let rolling: Vec<&Sample> =
-        samples.iter().filter(|s| s.vx_mps > 0.2 && s.alpha_rad.abs() > 0.1f64.to_radians()).collect();
+    let a_max = samples.iter().map(|s| s.alpha_rad.abs()).fold(0.0, f64::max);
+    if a_max < 0.2f64.to_radians() {
+        return None;
+    }
+    // The standstill with the wheel steered: the roll starts after it.
+    let stop = samples.iter().rposition(|s| s.vx_mps.abs() < 0.05 && s.alpha_rad.abs() > 0.5 * a_max)?;
+    let rolling: Vec<&Sample> = samples[stop..].iter().take_while(|s| s.alpha_rad.abs() > 0.5 * a_max).collect();
     if rolling.len() < 20 {
         return None;
     }
     let d0 = rolling[0].dist_m;
     let n = rolling.len();
-    let tail = &rolling[n * 4 / 5..];
+    let tail = &rolling[n * 3 / 4..];
     let fy_sat = tail.iter().map(|s| s.fy_n).sum::<f64>() / tail.len() as f64;
     if fy_sat.abs() < 50.0 {
         return None;
@@ -968,6 +995,9 @@ pub fn step_steer_length(samples: &[Sample]) -> Option<(f64, Sample)> {
         })
         .collect();
     let cross = |level: f64| -> Option<f64> {
+        if (smooth[0] - level) * fy_sat.signum() >= 0.0 {
+            return Some(0.0);
+        }
         (1..n).find(|&i| (smooth[i] - level) * fy_sat.signum() >= 0.0).map(|i| {
             let (a, b) = (smooth[i - 1], smooth[i]);
             let f = if (b - a).abs() > 1e-9 { ((level - a) / (b - a)).clamp(0.0, 1.0) } else { 0.0 };
@@ -982,19 +1012,33 @@ pub fn step_steer_length(samples: &[Sample]) -> Option<(f64, Sample)> {
     Some((d63 - dz, mean))
 }
 
-/// Static longitudinal stiffness of one test: the slope of −FX against belt travel over the
-/// elastic part (below half the largest force, before the patch slides).
+/// Static longitudinal stiffness of one test: the slope of FX against belt travel (LONGDISP)
+/// over the elastic part (below half the largest force, before the patch slides). `None` when
+/// the belt is not seen moving over that part (e.g. a rig that reports TRAJVELW = 0 while it
+/// drags the belt).
 pub fn static_stiffness(samples: &[Sample]) -> Option<(f64, Sample)> {
     let fmax = samples.iter().map(|s| s.fx_n.abs()).fold(0.0, f64::max);
     if fmax < 100.0 {
         return None;
     }
-    let xy: Vec<(f64, f64)> =
-        samples.iter().filter(|s| s.fx_n.abs() < 0.5 * fmax).map(|s| (s.dist_m, s.fx_n)).collect();
+    // The drag itself: from the last rolling sample on.
+    let start = samples.iter().rposition(|s| s.vx_mps > 0.05).map(|i| i + 1).unwrap_or(0);
+    let drag = &samples[start.min(samples.len())..];
+    let xy: Vec<(f64, f64)> = drag.iter().filter(|s| s.fx_n.abs() < 0.5 * fmax).map(|s| (s.dist_m, s.fx_n)).collect();
+    // The belt must be seen moving: a mean TRAJVELW clearly above its noise (integrating pure
+    // noise gives a random walk, not a displacement).
+    let v: Vec<f64> =
+        drag.iter().filter(|s| (0.1 * fmax..0.5 * fmax).contains(&s.fx_n.abs())).map(|s| s.vx_mps).collect();
+    let n = v.len().max(1) as f64;
+    let mean_v = v.iter().sum::<f64>() / n;
+    let sd_v = (v.iter().map(|x| (x - mean_v) * (x - mean_v)).sum::<f64>() / n).sqrt();
+    if v.len() < 5 || mean_v.abs() < 1e-3 || mean_v.abs() < 3.0 * sd_v / n.sqrt() {
+        return None;
+    }
     let (_, b) = starts::line_fit(&xy)?;
-    let mut mean = samples[samples.len() / 2];
-    mean.fz_n = samples.iter().map(|s| s.fz_n).sum::<f64>() / samples.len() as f64;
-    mean.p_pa = samples.iter().map(|s| s.p_pa).sum::<f64>() / samples.len() as f64;
+    let mut mean = drag[drag.len() / 2];
+    mean.fz_n = drag.iter().map(|s| s.fz_n).sum::<f64>() / drag.len() as f64;
+    mean.p_pa = drag.iter().map(|s| s.p_pa).sum::<f64>() / drag.len() as f64;
     (b.abs() > 0.0).then_some((b.abs(), mean))
 }
 

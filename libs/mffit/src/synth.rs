@@ -183,7 +183,7 @@ pub fn gs2mf(tyre: &TyreParams, o: SynthOptions) -> Dataset {
 
     // Step-steer at the mid pressure: FY builds up over the relaxation length.
     for &lf in &[0.5, 0.75, 1.0, 1.5] {
-        for &a in &[1.5, -1.5] {
+        for &a in &[1.5_f64, -1.5] {
             let p = o.pressures_pa[1];
             let probe = MfInput {
                 fz_n: lf * fz0,
@@ -196,16 +196,19 @@ pub fn gs2mf(tyre: &TyreParams, o: SynthOptions) -> Dataset {
                 omega_radps: 0.0,
             };
             let sigma = mftyre::evaluate(tyre, UseMode::M111, &probe).sigmay_m;
+            let ss =
+                mftyre::pure_fy(tyre, UseMode::M111, &MfInput { alpha_rad: a.to_radians(), fz_n: lf * fz0, ..probe });
             let mut s = Vec::new();
+            // Standstill with the wheel steered, then roll at 1 m/s for 1.5 m.
+            for i in 0..10 {
+                let mut smp = g.sample(i as f64 * dt, lf * fz0, 0.0, a, 0.0, p, 0.0, 0.0);
+                smp.fy_n = g.n(o.noise.force_n);
+                s.push(smp);
+            }
             let n = (1.5 / 1.0 * o.rate_hz) as usize;
             for i in 0..n {
                 let d = i as f64 * dt * 1.0;
-                let mut smp = g.sample(i as f64 * dt, lf * fz0, 0.0, a, 0.0, p, 1.0, d);
-                let ss = mftyre::pure_fy(
-                    tyre,
-                    UseMode::M111,
-                    &MfInput { alpha_rad: a.to_radians(), fz_n: lf * fz0, ..probe },
-                );
+                let mut smp = g.sample((i + 10) as f64 * dt, lf * fz0, 0.0, a, 0.0, p, 1.0, d);
                 smp.fy_n = ss * (1.0 - (-d / sigma).exp()) + g.n(o.noise.force_n);
                 s.push(smp);
             }

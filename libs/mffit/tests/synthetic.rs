@@ -13,7 +13,7 @@ fn truth() -> TyreParams {
 #[test]
 fn full_fit_recovers_the_true_tyre() {
     let tyre = truth();
-    let data = synth::gs2mf(&tyre, SynthOptions { rate_hz: 20.0, ..SynthOptions::default() });
+    let data = synth::gs2mf(&tyre, SynthOptions::default());
     let opts = FitOptions { max_points: 1500, ..FitOptions::default() };
     let result = fit(&data, &opts).expect("fit");
     for s in &result.stages {
