@@ -10,12 +10,12 @@
 use std::path::PathBuf;
 
 use rigsim::calibration::{
-    BASELINE_C, SweepKind, THESIS_BRKDRV, THESIS_FREEROLLING, brkdrv_setup, freerolling_setup, run_sweep, run_warmup,
-    settle,
+    SweepKind, THESIS_BRKDRV, THESIS_FREEROLLING, brkdrv_setup, comparison_sweep, freerolling_setup,
+    preconditioned_rig, run_warmup,
 };
 use rigsim::{RigConfig, TyreParams, VirtualRig};
 
-const NAMES: [&str; 13] = [
+const NAMES: [&str; 16] = [
     "surface_heat_capacity_j_per_k",
     "bulk_heat_capacity_j_per_k",
     "surface_bulk_conductance_w_per_k",
@@ -29,10 +29,15 @@ const NAMES: [&str; 13] = [
     "flash_lateral_k_per_kw",
     "flash_longitudinal_k_per_kw",
     "flash_time_constant_s",
+    "flash_longitudinal_time_constant_s",
+    "tyre_fraction_lateral (surface + bulk)",
+    "tyre_fraction_longitudinal (surface + bulk)",
 ];
 
+/// Indices 7/8 are the surface's share of the heat entering the tyre, 14/15 the share of the
+/// sliding power entering the tyre at all (the rest heats the belt).
 fn is_fraction(i: usize) -> bool {
-    i == 7 || i == 8
+    i == 7 || i == 8 || i == 14 || i == 15
 }
 
 fn get(cfg: &RigConfig) -> Vec<f64> {
@@ -45,12 +50,15 @@ fn get(cfg: &RigConfig) -> Vec<f64> {
         t.convection_speed_w_per_k,
         t.belt_contact_w_per_k,
         t.bulk_to_air_w_per_k,
-        t.surface_fraction_lateral,
-        t.surface_fraction_longitudinal,
+        t.surface_fraction_lateral / (t.surface_fraction_lateral + t.bulk_fraction_lateral),
+        t.surface_fraction_longitudinal / (t.surface_fraction_longitudinal + t.bulk_fraction_longitudinal),
         t.rolling_loss_coefficient,
         t.flash_lateral_k_per_kw,
         t.flash_longitudinal_k_per_kw,
         t.flash_time_constant_s,
+        t.flash_longitudinal_time_constant_s,
+        t.surface_fraction_lateral + t.bulk_fraction_lateral,
+        t.surface_fraction_longitudinal + t.bulk_fraction_longitudinal,
     ]
 }
 
@@ -63,18 +71,29 @@ fn set(cfg: &mut RigConfig, v: &[f64]) {
     t.convection_speed_w_per_k = v[4];
     t.belt_contact_w_per_k = v[5];
     t.bulk_to_air_w_per_k = v[6];
-    t.surface_fraction_lateral = v[7];
-    t.surface_fraction_longitudinal = v[8];
+    t.surface_fraction_lateral = v[7] * v[14];
+    t.bulk_fraction_lateral = (1.0 - v[7]) * v[14];
+    t.surface_fraction_longitudinal = v[8] * v[15];
+    t.bulk_fraction_longitudinal = (1.0 - v[8]) * v[15];
     t.rolling_loss_coefficient = v[9];
     t.flash_lateral_k_per_kw = v[10];
     t.flash_longitudinal_k_per_kw = v[11];
     t.flash_time_constant_s = v[12];
+    t.flash_longitudinal_time_constant_s = v[13];
 }
 
 fn to_x(v: &[f64]) -> Vec<f64> {
     v.iter()
         .enumerate()
-        .map(|(i, &p)| if is_fraction(i) { (p.clamp(1e-4, 1.0 - 1e-4) / (1.0 - p.clamp(1e-4, 1.0 - 1e-4))).ln() } else { p.ln() })
+        .map(
+            |(i, &p)| {
+                if is_fraction(i) {
+                    (p.clamp(1e-4, 1.0 - 1e-4) / (1.0 - p.clamp(1e-4, 1.0 - 1e-4))).ln()
+                } else {
+                    p.ln()
+                }
+            },
+        )
         .collect()
 }
 
@@ -83,16 +102,16 @@ fn from_x(x: &[f64]) -> Vec<f64> {
 }
 
 /// (peak, sweep+cool) of the six comparison sweeps and the warm-up temperatures.
-fn simulate(cfg: &RigConfig, params: &TyreParams) -> Option<(Vec<(f64, f64)>, Vec<f64>)> {
+/// (peak, sweep + cool) per comparison sweep, and the warm-up temperatures.
+type Simulated = (Vec<(f64, f64)>, Vec<f64>);
+
+fn simulate(cfg: &RigConfig, params: &TyreParams) -> Option<Simulated> {
     let mut out = Vec::new();
+    let pre = preconditioned_rig(cfg, params).ok()?;
     for fr in [true, false] {
         for kind in SweepKind::ALL {
             let s = if fr { freerolling_setup(kind) } else { brkdrv_setup(kind) };
-            let mut rig = VirtualRig::new(cfg.clone(), params.clone(), cfg.seed).ok()?;
-            rig.complete_break_in();
-            settle(&mut rig, &s, 8.0).ok()?;
-            rig.soak(BASELINE_C);
-            let o = run_sweep(&mut rig, &s, BASELINE_C, 150.0).ok()?;
+            let o = comparison_sweep(&pre, &s).ok()?;
             out.push((o.peak_temp_c, o.sweep_plus_cool_s()));
         }
     }
@@ -120,7 +139,10 @@ fn loss(cfg: &RigConfig, params: &TyreParams, verbose: bool) -> f64 {
             l += hinge(time - t.sweep_plus_cool_s, 0.2 * t.sweep_plus_cool_s);
         }
         if verbose {
-            println!("  sweep {i}: peak {peak:6.1} (thesis {:5.1})  time {time:7.2} (thesis {:6.2})", t.peak_temp_c, t.sweep_plus_cool_s);
+            println!(
+                "  sweep {i}: peak {peak:6.1} (thesis {:5.1})  time {time:7.2} (thesis {:6.2})",
+                t.peak_temp_c, t.sweep_plus_cool_s
+            );
         }
     }
     for table in 0..2 {
@@ -131,7 +153,8 @@ fn loss(cfg: &RigConfig, params: &TyreParams, verbose: bool) -> f64 {
                 if ta.peak_temp_c < tb.peak_temp_c && a.0 >= b.0 {
                     l += 2.0 + (a.0 - b.0) / 2.0;
                 }
-                if ta.sweep_plus_cool_s < tb.sweep_plus_cool_s && a.1 >= b.1 && table * 3 + j != 5 && table * 3 + i != 5 {
+                if ta.sweep_plus_cool_s < tb.sweep_plus_cool_s && a.1 >= b.1 && table * 3 + j != 5 && table * 3 + i != 5
+                {
                     l += 2.0 + (a.1 - b.1) / 2.0;
                 }
             }
@@ -207,11 +230,12 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     simplex.sort_by(|a, b| a.1.total_cmp(&b.1));
     let best = from_x(&simplex[0].0);
     println!("best loss {:.4}", simplex[0].1);
-    for (k, v) in NAMES.iter().zip(&best) {
-        println!("{k} = {v:.6}");
-    }
     let mut c = cfg0.clone();
     set(&mut c, &best);
+    for (k, v) in NAMES.iter().zip(&best) {
+        println!("# {k} = {v:.6}");
+    }
+    print!("{}", toml::to_string(&c.thermal).expect("toml"));
     loss(&c, &params, true);
     Ok(())
 }

@@ -2,10 +2,11 @@
 //! (FreeRolling) and 3.6.2-I (BrkDrv), the warm-up check (§3.4) and the wear check (§3.9).
 //!
 //! # The comparison sweeps
-//! Each sweep runs on a fresh rig (same seed) with a broken-in, new-tread tyre: the rig brings
-//! the belt and load up at zero slip, the tyre is soaked at the 45 °C baseline, the sweep runs
-//! 0 → −max → +max → 0, and a zero-slip thermal pause follows until TRDTEMPC (0.1 s mean) is
-//! back at 45 °C. The thesis gives rates and thresholds, not loads and ranges; chosen here:
+//! Each sweep runs on a fresh rig (same seed) with a broken-in, new-tread tyre brought to the
+//! 45 °C baseline as the thesis's procedures bring it ([`preconditioned_rig`]: the two warm-up blocks
+//! from 20 °C, a heating sweep, a thermal pause at the sweep's conditions until TRDTEMPC is back
+//! at 45 °C); the sweep runs 0 → −max → +max → 0, and a zero-slip thermal pause follows until
+//! TRDTEMPC (0.1 s mean) is back at 45 °C. The thesis gives rates and thresholds, not loads and ranges; chosen here:
 //! - **Range**: ±28° and ±30 %. The thesis's 30 °/s sweep went to ±28° (Fig. 3.6.1-B); with
 //!   that range its sweep times (112°/4 °/s = 28 s, 122.27 − 94.3 s cool-down = 27.97 s) and the
 //!   BrkDrv ones (10 %/s: 28.6 − 16.2 = 12.4 s; 40 %/s: 12.23 − 8.8 = 3.43 s) fit ±30 % plus
@@ -121,6 +122,9 @@ pub struct SweepSetup {
     pub pressure_pa: f64,
     /// Slip angle held during a longitudinal sweep [deg].
     pub slip_angle_deg: f64,
+    /// Asymmetric loading (reference §7): load factors of `fz_n` at slip angles ≤ −5° and ≥ +5°,
+    /// linear in between (weight transfer onto a right-side tyre when steering left).
+    pub load_coupling: Option<(f64, f64)>,
 }
 
 /// What a sweep and its thermal pause produced.
@@ -158,11 +162,18 @@ fn setpoint(setup: &SweepSetup, slip: f64) -> RigSetpoint {
         SweepAxis::Lateral => (RigSetpoint::MODE_FREE_ROLLING, slip, 0.0),
         SweepAxis::Longitudinal => (RigSetpoint::MODE_COUPLED, setup.slip_angle_deg, slip),
     };
+    let fz_n = match setup.load_coupling {
+        Some((neg, pos)) => {
+            let f = ((sa + 5.0) / 10.0).clamp(0.0, 1.0);
+            setup.fz_n * (neg + (pos - neg) * f)
+        }
+        None => setup.fz_n,
+    };
     RigSetpoint {
         mode,
         slip_angle_deg: sa,
         slip_ratio: sr,
-        fz_n: setup.fz_n,
+        fz_n,
         camber_deg: setup.camber_deg,
         pressure_pa: setup.pressure_pa,
         speed_mps: setup.speed_mps,
@@ -179,6 +190,55 @@ pub fn settle(rig: &mut VirtualRig, setup: &SweepSetup, settle_s: f64) -> Result
     Ok(())
 }
 
+/// Streams `setup`'s slip path to the rig at [`SETPOINT_RATE_HZ`], collecting samples.
+pub fn run_path(
+    rig: &mut VirtualRig,
+    setup: &SweepSetup,
+    samples: &mut Vec<RigSample>,
+) -> Result<(), crate::SetpointRefusal> {
+    let t0 = rig.time_s();
+    let duration = setup.path.duration_s();
+    let dt_sp = 1.0 / SETPOINT_RATE_HZ;
+    let n = (duration / dt_sp).ceil() as usize;
+    for k in 0..=n {
+        let t = (k as f64 * dt_sp).min(duration);
+        rig.apply_setpoint(&setpoint(setup, setup.path.at(t)))?;
+        rig.run_until(t0 + ((k + 1) as f64 * dt_sp).min(duration + dt_sp), &mut |s| samples.push(s.clone()));
+    }
+    Ok(())
+}
+
+/// The thermal pause: zero slip at `setup`'s load and speed until TRDTEMPC (0.1 s mean) is at
+/// `baseline_c`; returns its duration, or `None` when `timeout_s` passed first.
+pub fn thermal_pause(
+    rig: &mut VirtualRig,
+    setup: &SweepSetup,
+    baseline_c: f64,
+    timeout_s: f64,
+    samples: &mut Vec<RigSample>,
+) -> Result<Option<f64>, crate::SetpointRefusal> {
+    rig.apply_setpoint(&setpoint(setup, 0.0))?;
+    let t_start = rig.time_s();
+    let dt = 1.0 / SETPOINT_RATE_HZ;
+    let window = 10;
+    let mut recent: Vec<f64> = Vec::with_capacity(window);
+    let mut t = t_start;
+    while t < t_start + timeout_s {
+        t += dt;
+        rig.run_until(t, &mut |s| {
+            samples.push(s.clone());
+            if recent.len() == window {
+                recent.remove(0);
+            }
+            recent.push(s.trdtempc_c);
+        });
+        if recent.len() == window && recent.iter().sum::<f64>() / window as f64 <= baseline_c {
+            return Ok(Some(rig.time_s() - t_start));
+        }
+    }
+    Ok(None)
+}
+
 /// Runs one sweep from the rig's present state, then the zero-slip pause until TRDTEMPC
 /// (0.1 s mean) is at `baseline_c` or `cool_timeout_s` has passed.
 pub fn run_sweep(
@@ -190,33 +250,17 @@ pub fn run_sweep(
     let t0 = rig.time_s();
     let e0 = rig.truth().sliding_energy_j;
     let duration = setup.path.duration_s();
-    let dt_sp = 1.0 / SETPOINT_RATE_HZ;
     let mut samples = Vec::new();
-    let n = (duration / dt_sp).ceil() as usize;
-    for k in 0..=n {
-        let t = (k as f64 * dt_sp).min(duration);
-        rig.apply_setpoint(&setpoint(setup, setup.path.at(t)))?;
-        rig.run_until(t0 + ((k + 1) as f64 * dt_sp).min(duration + dt_sp), &mut |s| samples.push(s.clone()));
-    }
+    run_path(rig, setup, &mut samples)?;
     let t_end = t0 + duration;
     let energy = rig.truth().sliding_energy_j - e0;
-    rig.apply_setpoint(&setpoint(setup, 0.0))?;
-    let mut cooled = false;
-    let mut cool_s = cool_timeout_s;
-    let window = 10;
-    let mut t = rig.time_s();
-    while t < t_end + cool_timeout_s {
-        t += dt_sp;
-        rig.run_until(t, &mut |s| samples.push(s.clone()));
-        if samples.len() >= window {
-            let mean = samples[samples.len() - window..].iter().map(|s| s.trdtempc_c).sum::<f64>() / window as f64;
-            if mean <= baseline_c && t > t_end {
-                cooled = true;
-                cool_s = t - t_end;
-                break;
-            }
-        }
-    }
+    // The pause is timed from the end of the path (the servo may still be arriving).
+    let extra = rig.time_s() - t_end;
+    let pause = thermal_pause(rig, setup, baseline_c, cool_timeout_s, &mut samples)?;
+    let (cooled, cool_s) = match pause {
+        Some(p) => (true, p + extra),
+        None => (false, cool_timeout_s + extra),
+    };
     let start_temp_c = samples.first().map_or(f64::NAN, |s| s.trdtempc_c);
     let peak_temp_c = samples.iter().map(|s| s.trdtempc_c).fold(f64::NEG_INFINITY, f64::max);
     // Zero crossings while the slip is being swept (plus 0.3 s for the servo to arrive).
@@ -368,6 +412,7 @@ pub fn freerolling_setup(kind: SweepKind) -> SweepSetup {
         camber_deg: 0.0,
         pressure_pa: PRESSURE_PA,
         slip_angle_deg: 0.0,
+        load_coupling: None,
     }
 }
 
@@ -387,20 +432,52 @@ pub fn brkdrv_setup(kind: SweepKind) -> SweepSetup {
         camber_deg: 0.0,
         pressure_pa: PRESSURE_PA,
         slip_angle_deg: 0.0,
+        load_coupling: None,
     }
 }
 
-/// A comparison sweep on a fresh rig: settle at zero slip, soak at the baseline, sweep, cool.
-pub fn comparison_sweep(
-    cfg: &RigConfig,
-    params: &TyreParams,
-    setup: &SweepSetup,
-) -> Result<SweepOutcome, CalibrationError> {
+/// The heating sweep that follows the warm-up in the thesis's procedures (§4.1: "one sweep
+/// brings it to ~65 °C, then thermal pause"): the graph-sweep nominal load, GS2MF variable rate.
+pub fn heating_sweep() -> SweepSetup {
+    SweepSetup {
+        name: "Heating".into(),
+        axis: SweepAxis::Lateral,
+        path: SlipPath::variable(15.0, 2.0, 30.0, 4.0),
+        fz_n: 6000.0,
+        speed_mps: SPEED_MPS,
+        camber_deg: 0.0,
+        pressure_pa: PRESSURE_PA,
+        slip_angle_deg: 0.0,
+        load_coupling: None,
+    }
+}
+
+/// A new, broken-in tyre brought up the way the thesis's procedures do before their sweeps:
+/// the two warm-up blocks from 20 °C, then the heating sweep. Every comparison sweep starts
+/// from a clone of this rig, after a thermal pause at its own conditions
+/// ([`comparison_sweep`]); the bulk keeps the heat this history leaves in it, which is what
+/// makes cool-down times depend on the sweep.
+pub fn preconditioned_rig(cfg: &RigConfig, params: &TyreParams) -> Result<VirtualRig, CalibrationError> {
+    let mut cfg = cfg.clone();
+    cfg.environment.initial_tyre_temp_c = 20.0;
     let mut rig = VirtualRig::new(cfg.clone(), params.clone(), cfg.seed)?;
     rig.complete_break_in();
-    settle(&mut rig, setup, 8.0).map_err(|r| CalibrationError::Refused(setup.name.clone(), r))?;
-    rig.soak(BASELINE_C);
-    run_sweep(&mut rig, setup, BASELINE_C, COOL_TIMEOUT_S).map_err(|r| CalibrationError::Refused(setup.name.clone(), r))
+    run_warmup(&mut rig, 2)?;
+    let heat = heating_sweep();
+    settle(&mut rig, &heat, 3.0).map_err(|r| CalibrationError::Refused(heat.name.clone(), r))?;
+    let mut sink = Vec::new();
+    run_path(&mut rig, &heat, &mut sink).map_err(|r| CalibrationError::Refused(heat.name.clone(), r))?;
+    Ok(rig)
+}
+
+/// A comparison sweep on a clone of `preconditioned`: the thermal pause at the sweep's load,
+/// speed and drive mode until TRDTEMPC is at the 45 °C baseline, the sweep, the thermal pause.
+pub fn comparison_sweep(preconditioned: &VirtualRig, setup: &SweepSetup) -> Result<SweepOutcome, CalibrationError> {
+    let mut rig = preconditioned.clone();
+    let refused = |r| CalibrationError::Refused(setup.name.clone(), r);
+    let mut sink = Vec::new();
+    thermal_pause(&mut rig, setup, BASELINE_C, COOL_TIMEOUT_S, &mut sink).map_err(refused)?;
+    run_sweep(&mut rig, setup, BASELINE_C, COOL_TIMEOUT_S).map_err(refused)
 }
 
 /// Errors of the calibration harness.
@@ -562,6 +639,7 @@ fn warmup_setup(i: usize) -> SweepSetup {
         camber_deg: camber,
         pressure_pa: PRESSURE_PA,
         slip_angle_deg: 0.0,
+        load_coupling: None,
     }
 }
 
@@ -594,15 +672,16 @@ pub fn run_warmup(rig: &mut VirtualRig, blocks: usize) -> Result<Vec<f64>, Calib
     Ok(temps)
 }
 
-/// The representative GS2MF FreeRolling procedure for the wear check (reference §8, §10): a
+/// The representative GS2MF FreeRolling procedure for the wear check (reference §7, §8, §10): a
 /// heating sweep, graph sweeps (×5) before and after, and per pressure (2.1, 2.6, 3.3 bar) 14
-/// force & moment sweeps — three at 0.8/1.0/1.2 Fz0 to 16° (the asymmetric-load sweeps at their
-/// mean load), one with 1.8° camber, one with adverse camber, two low-slip sweeps to 4° at ±3°,
-/// three to 22° at 0.6/1.0/1.4 Fz0 and 0.8° camber, two to 18° at 0.5 Fz0 (the vertical-load
-/// sweeps cost little energy) and two adverse sweeps at ±3°. Every sweep is the GS2MF variable
-/// rate (2/30 °/s, 4°) with a thermal pause to 45 °C (120 s time-out, as the thesis's rig).
+/// force & moment sweeps: three asymmetric-load sweeps to 16° (load factors 1.8/0.6, 1.6/0.4,
+/// 1.4/0.2 of Fz0 at ∓5°), one with 1.8° camber, one with adverse (+3°) camber, two low-slip
+/// sweeps to 4° at ±3°, three to 22° at 0.8° camber (0.6/1.0/1.4 Fz0), two vertical-load sweeps
+/// (as 18° sweeps at 0.5 Fz0: they cost little energy, §7) and two adverse sweeps at ±3°
+/// (medium asymmetric load). Every sweep is the GS2MF variable rate (2/30 °/s, 4°) with a
+/// thermal pause to 45 °C (120 s time-out, as the thesis's rig).
 pub fn representative_freerolling(fz0_n: f64) -> Vec<SweepSetup> {
-    let mk = |name: String, fz: f64, camber: f64, max: f64, p: f64| SweepSetup {
+    let mk = |name: String, fz: f64, camber: f64, max: f64, p: f64, coupling: Option<(f64, f64)>| SweepSetup {
         name,
         axis: SweepAxis::Lateral,
         path: SlipPath::variable(max, 2.0, 30.0, 4.0_f64.min(max)),
@@ -611,36 +690,39 @@ pub fn representative_freerolling(fz0_n: f64) -> Vec<SweepSetup> {
         camber_deg: camber,
         pressure_pa: p,
         slip_angle_deg: 0.0,
+        load_coupling: coupling,
     };
     let graph_max = 15.0;
-    let mut v = vec![mk("Heating".into(), 6000.0, 0.0, 12.0, PRESSURE_PA)];
+    let mut v = vec![mk("Heating".into(), 6000.0, 0.0, 12.0, PRESSURE_PA, None)];
     for (i, &(fz, c)) in GRAPH_SWEEP_CASES.iter().enumerate() {
-        v.push(mk(format!("Graph1_{}", i + 1), fz, c, graph_max, PRESSURE_PA));
+        v.push(mk(format!("Graph1_{}", i + 1), fz, c, graph_max, PRESSURE_PA, None));
     }
+    let (high, medium, low) = (Some((1.8, 0.6)), Some((1.6, 0.4)), Some((1.4, 0.2)));
     for p in [210_000.0, 260_000.0, 330_000.0] {
-        let f = |k: f64| k * fz0_n;
-        let list: [(f64, f64, f64); 14] = [
-            (f(0.8), 0.0, 16.0),
-            (f(1.0), 0.0, 16.0),
-            (f(1.2), 0.0, 16.0),
-            (f(1.0), -1.8, 16.0),
-            (f(1.0), 3.0, 16.0),
-            (f(1.0), 3.0, 4.0),
-            (f(1.0), -3.0, 4.0),
-            (f(0.6), 0.8, 22.0),
-            (f(1.0), 0.8, 22.0),
-            (f(1.4), 0.8, 22.0),
-            (f(0.5), 0.0, 18.0),
-            (f(0.5), 0.0, 18.0),
-            (f(1.0), 3.0, 16.0),
-            (f(1.0), -3.0, 16.0),
+        // (load factor of Fz0, camber deg, max slip angle deg, asymmetric load factors)
+        type Case = (f64, f64, f64, Option<(f64, f64)>);
+        let list: [Case; 14] = [
+            (1.0, 0.0, 16.0, high),
+            (1.0, 0.0, 16.0, medium),
+            (1.0, 0.0, 16.0, low),
+            (1.0, -1.8, 16.0, medium),
+            (1.0, 3.0, 16.0, medium),
+            (1.0, 3.0, 4.0, None),
+            (1.0, -3.0, 4.0, None),
+            (0.6, 0.8, 22.0, None),
+            (1.0, 0.8, 22.0, None),
+            (1.4, 0.8, 22.0, None),
+            (0.5, 0.0, 18.0, None),
+            (0.5, 0.0, 18.0, None),
+            (1.0, 3.0, 16.0, medium),
+            (1.0, -3.0, 16.0, medium),
         ];
-        for (i, (fz, c, max)) in list.into_iter().enumerate() {
-            v.push(mk(format!("FM_{:.1}bar_{}", p / 1e5, i + 1), fz, c, max, p));
+        for (i, (k, c, max, coupling)) in list.into_iter().enumerate() {
+            v.push(mk(format!("FM_{:.1}bar_{}", p / 1e5, i + 1), k * fz0_n, c, max, p, coupling));
         }
     }
     for (i, &(fz, c)) in GRAPH_SWEEP_CASES.iter().enumerate() {
-        v.push(mk(format!("Graph2_{}", i + 1), fz, c, graph_max, PRESSURE_PA));
+        v.push(mk(format!("Graph2_{}", i + 1), fz, c, graph_max, PRESSURE_PA, None));
     }
     v
 }
@@ -655,6 +737,7 @@ fn radius_at_reference(rig: &mut VirtualRig) -> Result<f64, CalibrationError> {
         camber_deg: 0.0,
         pressure_pa: PRESSURE_PA,
         slip_angle_deg: 0.0,
+        load_coupling: None,
     };
     settle(rig, &setup, 6.0).map_err(|r| CalibrationError::Refused(setup.name.clone(), r))?;
     let mut r = Vec::new();
@@ -695,15 +778,16 @@ pub fn run_calibration(cfg: &RigConfig, params: &TyreParams) -> Result<Calibrati
     let mut outcomes = Vec::new();
     let mut freerolling = Vec::new();
     let mut brkdrv = Vec::new();
+    let pre = preconditioned_rig(cfg, params)?;
     for (i, kind) in SweepKind::ALL.into_iter().enumerate() {
         let s = freerolling_setup(kind);
-        let o = comparison_sweep(cfg, params, &s)?;
+        let o = comparison_sweep(&pre, &s)?;
         freerolling.push(row(kind, &o, THESIS_FREEROLLING[i]));
         outcomes.push((s.name.clone(), s.axis, o));
     }
     for (i, kind) in SweepKind::ALL.into_iter().enumerate() {
         let s = brkdrv_setup(kind);
-        let o = comparison_sweep(cfg, params, &s)?;
+        let o = comparison_sweep(&pre, &s)?;
         brkdrv.push(row(kind, &o, THESIS_BRKDRV[i]));
         outcomes.push((s.name.clone(), s.axis, o));
     }

@@ -390,10 +390,10 @@ pub struct TransientParams {
 impl Default for TransientParams {
     fn default() -> Self {
         Self {
-            sigma_y0_m: 0.65,
+            sigma_y0_m: 0.7,
             sigma_y_half_slip_deg: 2.31,
             sigma_y_min_m: 0.03,
-            sigma_x0_m: 0.35,
+            sigma_x0_m: 0.43,
             sigma_x_half_slip: 0.02,
             sigma_x_min_m: 0.03,
             load_exponent: 0.3,
@@ -419,10 +419,15 @@ pub struct ThermalParams {
     pub belt_contact_w_per_k: f64,
     /// Conductance of the bulk to air (sidewall, rim) [W/K].
     pub bulk_to_air_w_per_k: f64,
-    /// Fraction of lateral sliding power (PY) deposited in the surface layer (rest: bulk) [-].
+    /// Fraction of lateral sliding power (PY) deposited in the surface layer [-].
     pub surface_fraction_lateral: f64,
     /// Fraction of longitudinal sliding power (PX) deposited in the surface layer [-].
     pub surface_fraction_longitudinal: f64,
+    /// Fraction of lateral sliding power deposited in the bulk [-]; what neither the surface
+    /// nor the bulk takes goes into the belt (steel under sandpaper, cooled by its bearing).
+    pub bulk_fraction_lateral: f64,
+    /// Fraction of longitudinal sliding power deposited in the bulk [-].
+    pub bulk_fraction_longitudinal: f64,
     /// Rolling-loss power into the bulk per N of load per m/s [W/(N·m/s)] (a rolling
     /// resistance coefficient).
     pub rolling_loss_coefficient: f64,
@@ -431,8 +436,10 @@ pub struct ThermalParams {
     /// Flash temperature rise per kW of longitudinal sliding power, steady [K/kW]: sliding in
     /// the rolling direction concentrates in the rear of the patch, under the centre laser.
     pub flash_longitudinal_k_per_kw: f64,
-    /// Time constant of the flash temperature [s] ("cools in moments").
+    /// Time constant of the lateral flash temperature [s] ("cools in moments").
     pub flash_time_constant_s: f64,
+    /// Time constant of the longitudinal flash temperature [s].
+    pub flash_longitudinal_time_constant_s: f64,
     /// Heat share of the inner/outer shoulder per degree of camber [1/deg]; negative camber
     /// loads the inner shoulder of a right-side tyre.
     pub camber_zone_share_per_deg: f64,
@@ -441,19 +448,22 @@ pub struct ThermalParams {
 impl Default for ThermalParams {
     fn default() -> Self {
         Self {
-            surface_heat_capacity_j_per_k: 5010.0,
-            bulk_heat_capacity_j_per_k: 26950.0,
-            surface_bulk_conductance_w_per_k: 30.98,
-            convection_w_per_k: 11.7,
-            convection_speed_w_per_k: 1.631,
-            belt_contact_w_per_k: 25.48,
-            bulk_to_air_w_per_k: 17.84,
-            surface_fraction_lateral: 0.6289,
-            surface_fraction_longitudinal: 0.3047,
-            rolling_loss_coefficient: 0.01164,
-            flash_lateral_k_per_kw: 0.6387,
-            flash_longitudinal_k_per_kw: 1.247,
-            flash_time_constant_s: 0.177,
+            surface_heat_capacity_j_per_k: 8000.0,
+            bulk_heat_capacity_j_per_k: 30000.0,
+            surface_bulk_conductance_w_per_k: 36.0,
+            convection_w_per_k: 10.6,
+            convection_speed_w_per_k: 1.66,
+            belt_contact_w_per_k: 25.6,
+            bulk_to_air_w_per_k: 32.0,
+            surface_fraction_lateral: 0.4,
+            surface_fraction_longitudinal: 0.09,
+            bulk_fraction_lateral: 0.4,
+            bulk_fraction_longitudinal: 0.21,
+            rolling_loss_coefficient: 0.0167,
+            flash_lateral_k_per_kw: 1.0,
+            flash_longitudinal_k_per_kw: 1.5,
+            flash_time_constant_s: 1.0,
+            flash_longitudinal_time_constant_s: 0.5,
             camber_zone_share_per_deg: 0.05,
         }
     }
@@ -588,11 +598,11 @@ impl Default for NoiseParams {
             speed_mps: 0.01,
             radius_m: 0.00003,
             temp_c: 0.3,
-            coupled_fx_gain: 4.0,
+            coupled_fx_gain: 2.0,
             coupled_mx_gain: 25.0,
             coupled_moment_gain: 3.0,
             slow_control_slip_ratio: 0.002,
-            coupled_slip_ratio: 0.0005,
+            coupled_slip_ratio: 0.0003,
             control_time_constant_s: 0.05,
         }
     }
@@ -891,6 +901,7 @@ impl RigConfig {
             ("thermal.surface_heat_capacity_j_per_k", th.surface_heat_capacity_j_per_k),
             ("thermal.bulk_heat_capacity_j_per_k", th.bulk_heat_capacity_j_per_k),
             ("thermal.flash_time_constant_s", th.flash_time_constant_s),
+            ("thermal.flash_longitudinal_time_constant_s", th.flash_longitudinal_time_constant_s),
         ] {
             if !(v.is_finite() && v > 0.0) {
                 return bad(k, "must be finite and > 0");
@@ -927,6 +938,14 @@ impl RigConfig {
         ] {
             if !(0.0..=1.0).contains(&v) {
                 return bad(k, "must be in 0..=1");
+            }
+        }
+        for (k, v) in [
+            ("thermal.bulk_fraction_lateral", th.surface_fraction_lateral + th.bulk_fraction_lateral),
+            ("thermal.bulk_fraction_longitudinal", th.surface_fraction_longitudinal + th.bulk_fraction_longitudinal),
+        ] {
+            if !(0.0..=1.0).contains(&v) {
+                return bad(k, "must be ≥ 0 and, with the surface fraction, ≤ 1");
             }
         }
         if !(0.0..=0.3).contains(&th.camber_zone_share_per_deg) {

@@ -128,11 +128,13 @@ struct Servo {
     interval_s: f64,
 }
 
+/// How far above its rated rate a servo may run to catch up with its trajectory [-].
+const SERVO_RATE_HEADROOM: f64 = 1.1;
 /// Position-error time constant of the servos [s].
 const SERVO_TIME_CONSTANT_S: f64 = 0.01;
 /// The filtered slip-ratio rate must exceed the bead's limit by this factor before the tyre
 /// slips on the rim (servo ripple at exactly the limit does not count).
-const RIM_SLIP_RATE_MARGIN: f64 = 1.05;
+const RIM_SLIP_RATE_MARGIN: f64 = 1.15;
 /// How much faster than the bead limit the tread's slip ratio rejoins the rim's after slipping.
 const RIM_REGRIP_RATE_FACTOR: f64 = 20.0;
 /// Setpoints further apart than this are steps, not a streamed trajectory [s].
@@ -171,7 +173,11 @@ impl Servo {
         // Close the error no faster than the acceleration limit can still brake to the target
         // trajectory (time-optimal approach), so rate changes and reversals do not ring.
         let close = (e.abs() / SERVO_TIME_CONSTANT_S).min((2.0 * accel * e.abs()).sqrt());
-        let want = (ff + e.signum() * close).clamp(-rate, rate);
+        // The servo may exceed the rated rate by a small headroom to catch up a lag (e.g. after
+        // accelerating onto a ramp at the rated rate), so it tracks the trajectory, not a
+        // constant delay behind it.
+        let max = rate * SERVO_RATE_HEADROOM;
+        let want = (ff + e.signum() * close).clamp(-max, max);
         let dv = (want - self.vel).clamp(-accel * dt, accel * dt);
         self.vel += dv;
         let step = self.vel * dt;
@@ -211,7 +217,9 @@ struct ModelOut {
 }
 
 /// The virtual flat-track rig. Pure: no I/O, no clock; time advances by [`VirtualRig::step`].
-#[derive(Debug)]
+/// Cloning forks the whole state, noise stream included (e.g. one preconditioned tyre, several
+/// experiments).
+#[derive(Debug, Clone)]
 pub struct VirtualRig {
     cfg: RigConfig,
     params: TyreParams,
@@ -506,7 +514,7 @@ impl VirtualRig {
             tread_worn_mm: self.tread_worn_mm,
             surface_temp_c: ts,
             bulk_temp_c: self.thermal.bulk_c,
-            flash_temp_k: self.thermal.flash_k,
+            flash_temp_k: self.thermal.flash_total_k(),
             grip_temp_c: self.grip_temp_c,
             grip_factor: self.grip_factor,
             stiffness_factor: self.stiffness_factor,
@@ -567,7 +575,8 @@ impl VirtualRig {
         self.fz_n = slew(self.fz_n, fz_target, l.load_rate_n_per_s, dt);
         if mode != RigSetpoint::MODE_SAFE {
             self.camber_deg = slew(self.camber_deg, self.targets.camber_deg, l.camber_rate_deg_per_s, dt);
-            self.pressure_pa += (self.targets.pressure_pa - self.pressure_pa) * (dt / l.pressure_time_constant_s).min(1.0);
+            self.pressure_pa +=
+                (self.targets.pressure_pa - self.pressure_pa) * (dt / l.pressure_time_constant_s).min(1.0);
         }
         self.speed_mps = slew(self.speed_mps, speed_target, l.belt_accel_mps2, dt);
         let statik = mode == RigSetpoint::MODE_STATIC;

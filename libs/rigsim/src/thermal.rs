@@ -3,7 +3,7 @@
 //!
 //! ```text
 //!   sliding power P = √(PX² + PY²)          rolling loss
-//!        │ f·P (by zone share)   (1−f)·P         │
+//!        │ f_s·P (by zone share)  f_b·P          │   (rest of P: into the belt)
 //!        ▼                          ▼            ▼
 //!   [surface i/c/o] ──G_sb── [bulk] ──G_b,air── air
 //!     │ conv(V)   │ belt contact (cooled by the belt's bearing)
@@ -35,8 +35,10 @@ pub(crate) struct ThermalState {
     pub surface_c: [f64; 3],
     /// Bulk [°C].
     pub bulk_c: f64,
-    /// Flash temperature rise [K].
+    /// Flash temperature rise from lateral sliding [K].
     pub flash_k: f64,
+    /// Flash temperature rise from longitudinal sliding [K].
+    pub flash_long_k: f64,
 }
 
 /// Heat share of the inner, centre and outer zones at camber `camber_deg`. Negative camber
@@ -48,7 +50,12 @@ pub(crate) fn zone_shares(p: &ThermalParams, camber_deg: f64) -> [f64; 3] {
 
 impl ThermalState {
     pub(crate) fn uniform(temp_c: f64) -> Self {
-        Self { surface_c: [temp_c; 3], bulk_c: temp_c, flash_k: 0.0 }
+        Self { surface_c: [temp_c; 3], bulk_c: temp_c, flash_k: 0.0, flash_long_k: 0.0 }
+    }
+
+    /// Both flash components [K].
+    pub(crate) fn flash_total_k(&self) -> f64 {
+        self.flash_k + self.flash_long_k
     }
 
     pub(crate) fn surface_mean_c(&self) -> f64 {
@@ -58,11 +65,8 @@ impl ThermalState {
     /// What the three lasers read (before sensor noise).
     pub(crate) fn measured_c(&self, p: &ThermalParams, camber_deg: f64) -> [f64; 3] {
         let w = zone_shares(p, camber_deg);
-        [
-            self.surface_c[0] + self.flash_k * 3.0 * w[0],
-            self.surface_c[1] + self.flash_k * 3.0 * w[1],
-            self.surface_c[2] + self.flash_k * 3.0 * w[2],
-        ]
+        let f = self.flash_total_k();
+        [self.surface_c[0] + f * 3.0 * w[0], self.surface_c[1] + f * 3.0 * w[1], self.surface_c[2] + f * 3.0 * w[2]]
     }
 
     /// Advances by `dt_s` (explicit Euler; the smallest time constant with the calibrated
@@ -71,8 +75,9 @@ impl ThermalState {
         let w = zone_shares(p, u.camber_deg);
         let surface_power =
             p.surface_fraction_lateral * u.lateral_power_w + p.surface_fraction_longitudinal * u.longitudinal_power_w;
-        let total_power = u.lateral_power_w + u.longitudinal_power_w;
-        let bulk_power = (total_power - surface_power).max(0.0) + u.rolling_loss_w;
+        let bulk_power = p.bulk_fraction_lateral * u.lateral_power_w
+            + p.bulk_fraction_longitudinal * u.longitudinal_power_w
+            + u.rolling_loss_w;
         let conv = p.convection_w_per_k + p.convection_speed_w_per_k * u.speed_mps.max(0.0).powf(0.8);
         // The contact area (so the belt's cooling) grows roughly with √load.
         let belt = if u.load_factor > 0.0 { p.belt_contact_w_per_k * u.load_factor.sqrt() } else { 0.0 };
@@ -87,8 +92,9 @@ impl ThermalState {
         }
         let qb = bulk_power + to_bulk - p.bulk_to_air_w_per_k * (self.bulk_c - u.ambient_c);
         self.bulk_c += qb / p.bulk_heat_capacity_j_per_k * dt_s;
-        let target = (p.flash_lateral_k_per_kw * u.lateral_power_w + p.flash_longitudinal_k_per_kw * u.longitudinal_power_w) * 1e-3;
         let a = 1.0 - (-dt_s / p.flash_time_constant_s).exp();
-        self.flash_k += (target - self.flash_k) * a;
+        self.flash_k += (p.flash_lateral_k_per_kw * u.lateral_power_w * 1e-3 - self.flash_k) * a;
+        let a = 1.0 - (-dt_s / p.flash_longitudinal_time_constant_s).exp();
+        self.flash_long_k += (p.flash_longitudinal_k_per_kw * u.longitudinal_power_w * 1e-3 - self.flash_long_k) * a;
     }
 }
