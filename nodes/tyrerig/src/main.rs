@@ -8,6 +8,7 @@ use clap::{Parser, Subcommand};
 
 // --- subcommand modules (one per capability) ---
 mod cmd_run;
+mod cmd_rig;
 mod cmd_model;
 mod cmd_launch;
 mod cmd_mcap;
@@ -26,6 +27,9 @@ enum Command {
     // --- subcommand variants ---
     /// Run a procedure on the virtual rig, log it to MCAP and print the rig-time summary
     Run(Box<cmd_run::RunArgs>),
+    /// Virtual rig: calibration against the thesis
+    #[command(subcommand)]
+    Rig(cmd_rig::RigCmd),
     /// MF-Tyre 6.1 model: evaluate and plot
     #[command(subcommand)]
     Model(cmd_model::ModelCmd),
@@ -46,6 +50,7 @@ fn main() -> anyhow::Result<()> {
     match cli.command {
         // --- subcommand dispatch ---
         Command::Run(args) => cmd_run::run(*args),
+        Command::Rig(cmd) => cmd_rig::run(cmd),
         Command::Model(cmd) => cmd_model::run(cmd),
         Command::Launch(args) => cmd_launch::run_launch(args),
         Command::Node(args) => cmd_launch::run_single(args),
