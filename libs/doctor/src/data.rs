@@ -55,11 +55,13 @@ pub struct DataOptions {
     pub min_load_n: f64,
     /// Sliding power below which the lasers read the grip temperature without flash [W].
     pub quiet_power_w: f64,
+    /// Most points kept (evenly thinned beyond it, so a full GS2MF log stays tractable).
+    pub max_points: usize,
 }
 
 impl Default for DataOptions {
     fn default() -> Self {
-        Self { point_rate_hz: 10.0, min_speed_mps: 3.0, min_load_n: 300.0, quiet_power_w: 1500.0 }
+        Self { point_rate_hz: 10.0, min_speed_mps: 3.0, min_load_n: 300.0, quiet_power_w: 1500.0, max_points: 8000 }
     }
 }
 
@@ -188,6 +190,10 @@ impl Dataset {
                 ),
             });
         }
+        if ds.points.len() > opt.max_points.max(100) {
+            let step = ds.points.len().div_ceil(opt.max_points.max(100));
+            ds.points = ds.points.iter().copied().step_by(step).collect();
+        }
         ds.derive(opt);
         Ok(ds)
     }
@@ -289,7 +295,8 @@ impl Dataset {
                 since_point += 1;
             }
         }
-        *t_offset = self.series.t_s.last().copied().unwrap_or(0.0) + 1.0 - last_t.max(0.0);
+        // The next log's clock starts again near zero: continue after this one.
+        *t_offset = self.series.t_s.last().copied().unwrap_or(0.0) + 1.0;
         Ok(())
     }
 

@@ -27,6 +27,8 @@ pub struct DoctorConfig {
     pub region_sigma: f64,
     /// Fit settings.
     pub fit: FitOptions,
+    /// Worker threads scoring candidates.
+    pub threads: usize,
 }
 
 impl Default for DoctorConfig {
@@ -39,6 +41,7 @@ impl Default for DoctorConfig {
             candidates: Effect::ALL.to_vec(),
             region_sigma: 2.0,
             fit: FitOptions::default(),
+            threads: std::thread::available_parallelism().map_or(1, |n| n.get()).min(4),
         }
     }
 }
@@ -170,6 +173,9 @@ pub struct PlotData {
     pub region: Vec<Vec<usize>>,
 }
 
+/// A candidate's score with its effect set and held-out predictions (testable candidates).
+type Scored = (CandidateScore, Option<(Vec<FitSpec>, Vec<[f64; 4]>)>);
+
 fn rms_of(meas: &[[f64; 4]], pred: &[[f64; 4]], ch: usize, which: &[usize]) -> f64 {
     let (mut s, mut n) = (0.0, 0usize);
     for &k in which {
@@ -224,14 +230,11 @@ pub fn diagnose(ds: &Dataset, base: &TyreParams, cfg: &DoctorConfig) -> Result<D
             );
             break;
         }
-        let mut scores = Vec::new();
-        let mut cv_preds = Vec::new();
-        for &eff in &cfg.candidates {
-            if chosen.iter().any(|c| c.effect == eff) {
-                continue;
-            }
+        let todo: Vec<Effect> =
+            cfg.candidates.iter().copied().filter(|e| !chosen.iter().any(|c| c.effect == *e)).collect();
+        let score_one = |eff: Effect| -> Scored {
             if let Some(reason) = untestable_reason(eff, ds) {
-                scores.push(CandidateScore {
+                let s = CandidateScore {
                     effect: eff,
                     testable: false,
                     reason,
@@ -243,9 +246,8 @@ pub fn diagnose(ds: &Dataset, base: &TyreParams, cfg: &DoctorConfig) -> Result<D
                     evidence: 0.0,
                     delta_chi2_by_channel: [0.0; 4],
                     significant: false,
-                });
-                cv_preds.push(None);
-                continue;
+                };
+                return (s, None);
             }
             let mut specs = chosen.clone();
             let new = FitSpec { effect: eff, params: param_specs(eff, ds, base) };
@@ -259,7 +261,7 @@ pub fn diagnose(ds: &Dataset, base: &TyreParams, cfg: &DoctorConfig) -> Result<D
             let ca = chi2(&meas, &pred, &sigma, &all);
             let evidence = (chi_before - chi_after - k as f64 * n_res.ln()) / chi_before;
             let significant = evidence >= cfg.min_evidence && improved + 1 >= fl.len();
-            scores.push(CandidateScore {
+            let s = CandidateScore {
                 effect: eff,
                 testable: true,
                 reason: String::new(),
@@ -271,9 +273,27 @@ pub fn diagnose(ds: &Dataset, base: &TyreParams, cfg: &DoctorConfig) -> Result<D
                 evidence,
                 delta_chi2_by_channel: [cb[0] - ca[0], cb[1] - ca[1], cb[2] - ca[2], cb[3] - ca[3]],
                 significant,
-            });
-            cv_preds.push(Some((specs, pred)));
-        }
+            };
+            (s, Some((specs, pred)))
+        };
+        // Candidates are independent: score them on `threads` workers, results in catalogue order.
+        let threads = cfg.threads.max(1).min(todo.len().max(1));
+        let mut results: Vec<Option<Scored>> = vec![None; todo.len()];
+        std::thread::scope(|sc| {
+            let chunks: Vec<Vec<(usize, Effect)>> =
+                (0..threads).map(|t| todo.iter().copied().enumerate().skip(t).step_by(threads).collect()).collect();
+            let handles: Vec<_> = chunks
+                .into_iter()
+                .map(|chunk| sc.spawn(|| chunk.into_iter().map(|(i, e)| (i, score_one(e))).collect::<Vec<_>>()))
+                .collect();
+            for h in handles {
+                // A worker only panics on a bug; surface it rather than hide a candidate.
+                for (i, r) in h.join().expect("candidate worker") {
+                    results[i] = Some(r);
+                }
+            }
+        });
+        let (scores, mut cv_preds): (Vec<CandidateScore>, Vec<_>) = results.into_iter().flatten().unzip();
         let mut order: Vec<usize> = (0..scores.len()).filter(|&i| scores[i].testable).collect();
         order.sort_by(|&a, &b| scores[b].evidence.total_cmp(&scores[a].evidence));
         let best = order.first().copied();

@@ -26,7 +26,7 @@
 //! let ds = Dataset::from_logs(&[log], &DataOptions::default())?;
 //! let base = mftyre::TyreParams::read_tir(std::path::Path::new("base.tir"))?;
 //! let dx = diagnose(&ds, &base, &DoctorConfig::default())?;
-//! report::write_all(std::path::Path::new("out"), &ds, &base, &dx, "base.tir")?;
+//! report::write_all(std::path::Path::new("out"), &ds, &base, &dx, "base.tir", 0.0)?;
 //! # Ok::<(), Box<dyn std::error::Error>>(())
 //! ```
 

@@ -1,0 +1,122 @@
+//! `tyrerig doctor`: find where an MF-Tyre 6.1 model and rig logs disagree beyond the noise,
+//! name the missing effect (thermal, wear, break-in, transient, pressure, …), add it to the
+//! model and show the gap shrink. See `docs/doctor.md` and the `doctor` crate.
+
+use anyhow::{Context, Result, bail};
+use clap::Args;
+use doctor::{DataOptions, Dataset, DoctorConfig, Effect, RawLog, diagnose, report};
+use mftyre::TyreParams;
+use std::path::PathBuf;
+use std::time::Instant;
+
+/// Arguments of `tyrerig doctor`.
+#[derive(Debug, Args)]
+pub struct DoctorArgs {
+    /// MCAP logs of the test, in test order (each log is one tyre's run)
+    #[arg(required = true)]
+    logs: Vec<PathBuf>,
+    /// Base MF-Tyre 6.1 model to diagnose
+    #[arg(long, conflicts_with = "fit")]
+    model: Option<PathBuf>,
+    /// Fit the base model to the logs first (mffit's staged GS2MF fit), then diagnose it
+    #[arg(long)]
+    fit: bool,
+    /// Output directory (doctor.json, report.md, plots, <model>_doctor.tir)
+    #[arg(long)]
+    out: PathBuf,
+    /// Rate of the residual points inside sweeps [Hz]
+    #[arg(long, default_value_t = 10.0)]
+    rate_hz: f64,
+    /// Held-out folds (sweeps dealt round-robin)
+    #[arg(long, default_value_t = 4)]
+    folds: usize,
+    /// Smallest evidence (share of held-out χ² explained, after the parameter penalty) to name
+    /// an effect
+    #[arg(long, default_value_t = 0.05)]
+    min_evidence: f64,
+    /// Most effects named
+    #[arg(long, default_value_t = 3)]
+    max_effects: usize,
+    /// Candidates to test (comma list; default: all of thermal, wear, break_in, transient,
+    /// pressure, camber, speed, load, offset)
+    #[arg(long)]
+    candidates: Option<String>,
+}
+
+/// Runs `tyrerig doctor`.
+pub fn run(args: DoctorArgs) -> Result<()> {
+    let t0 = Instant::now();
+    let mut logs = Vec::new();
+    for p in &args.logs {
+        logs.push(RawLog::read_mcap(p)?);
+    }
+    let ds = Dataset::from_logs(&logs, &DataOptions { point_rate_hz: args.rate_hz, ..DataOptions::default() })?;
+    let (base, base_name): (TyreParams, String) = match (&args.model, args.fit) {
+        (Some(m), _) => (
+            TyreParams::read_tir(m).with_context(|| format!("{}: cannot read the base model", m.display()))?,
+            m.display().to_string(),
+        ),
+        (None, true) => {
+            let paths: Vec<&std::path::Path> = args.logs.iter().map(PathBuf::as_path).collect();
+            let data = mffit::logs::read_logs(&paths).context("reading the logs for the base fit")?;
+            eprintln!("fitting the base model to {} log(s) …", paths.len());
+            let fit = mffit::stages::fit(&data, &mffit::stages::FitOptions::default()).context("base model fit")?;
+            std::fs::create_dir_all(&args.out).with_context(|| format!("{}: cannot create", args.out.display()))?;
+            let path = args.out.join("base_fit.tir");
+            std::fs::write(&path, fit.params.to_tir_string()).with_context(|| format!("{}", path.display()))?;
+            (fit.params, path.display().to_string())
+        }
+        (None, false) => bail!("give the base model with --model <base.tir>, or --fit to fit one to the logs"),
+    };
+    let candidates = match &args.candidates {
+        None => Effect::ALL.to_vec(),
+        Some(list) => list
+            .split(',')
+            .map(str::trim)
+            .filter(|s| !s.is_empty())
+            .map(|s| {
+                Effect::parse(s).with_context(|| {
+                    format!(
+                        "--candidates: unknown effect {s:?} (expected {})",
+                        Effect::ALL.map(Effect::name).join(", ")
+                    )
+                })
+            })
+            .collect::<Result<Vec<_>>>()?,
+    };
+    let cfg = DoctorConfig {
+        folds: args.folds,
+        min_evidence: args.min_evidence,
+        max_effects: args.max_effects,
+        candidates,
+        ..DoctorConfig::default()
+    };
+    eprintln!("{} points in {} sweeps; testing {} candidates …", ds.len(), ds.sweeps.len(), cfg.candidates.len());
+    let dx = diagnose(&ds, &base, &cfg)?;
+    let wall = t0.elapsed().as_secs_f64();
+    let w = report::write_all(&args.out, &ds, &base, &dx, &base_name, wall)?;
+    if dx.named.is_empty() {
+        println!("no effect named: {}", dx.stop_reason);
+    }
+    for (i, n) in dx.named.iter().enumerate() {
+        println!(
+            "{}. {} (evidence {:.3}; runner-up {}): {} RMS in its region {:.4} → {:.4} held-out, {:.4} → {:.4} fit",
+            i + 1,
+            n.effect.name(),
+            n.evidence,
+            n.runner_up.map_or("none".to_owned(), |(e, v)| format!("{} {:.3}", e.name(), v)),
+            n.channel,
+            n.rms_before_heldout,
+            n.rms_after_heldout,
+            n.rms_before,
+            n.rms_after
+        );
+    }
+    println!("report: {}", w.markdown.display());
+    println!("json:   {}", w.json.display());
+    if let Some(m) = &w.model {
+        println!("model:  {}", m.display());
+    }
+    println!("wall time {wall:.1} s");
+    Ok(())
+}
