@@ -438,6 +438,24 @@ fn run_steps(
     Ok(outs)
 }
 
+/// Noise floor of a channel: from consecutive resampled samples at (nearly) the same operating
+/// point, σ ≈ median|Δ| / (0.6745·√2).
+fn noise_floor(ctx: &Ctx, keep_seg: impl Fn(&Segment) -> bool, measured: fn(&Sample) -> f64) -> f64 {
+    let mut d = Vec::new();
+    for seg in ctx.data.segments.iter().filter(|s| keep_seg(s)) {
+        let rs = resample(&seg.samples, period_of(ctx, seg));
+        for w in rs.windows(2) {
+            if (w[1].alpha_rad - w[0].alpha_rad).abs() < 0.05f64.to_radians()
+                && (w[1].kappa - w[0].kappa).abs() < 0.002
+                && (w[1].fz_n - w[0].fz_n).abs() < 100.0
+            {
+                d.push((measured(&w[1]) - measured(&w[0])).abs());
+            }
+        }
+    }
+    starts::median(d).map(|m| m / (0.6745 * std::f64::consts::SQRT_2)).unwrap_or(0.0)
+}
+
 fn near_nominal_camber(p: &Point) -> bool {
     p.input.gamma_rad.abs() < 0.4f64.to_radians()
 }
@@ -604,7 +622,31 @@ fn stage_mz_pure(ctx: &Ctx, params: &mut TyreParams, rep: &mut StageReport) -> R
         ("pressure", MZ_PRESSURE.to_vec(), all.clone()),
         ("all", all_keys, all.clone()),
     ];
+    let start = params.clone();
     run_steps(ctx, params, rep, Channel::Mz0, &all, &steps)?;
+    // Mz's trail and residual-torque terms have local minima: when the fit stays well above
+    // the data's noise floor, start again from other trail shapes and keep the best.
+    let floor = noise_floor(ctx, |s| s.procedure == Procedure::FreeRolling && s.kind == DataKind::Sweep, |s| s.mz_nm);
+    let good_enough = |rmse: f64| rmse < 2.5 * floor + 0.005 * peak_abs(&all);
+    if !good_enough(rep.rmse) {
+        rep.notes.push(format!("rmse {:.2} above the noise floor {floor:.2}: restarting", rep.rmse));
+        for (i, alt) in [[qbz1 * 0.6, 1.5, qdz1, -1.0], [qbz1 * 1.5, 1.0, qdz1, 0.5]].iter().enumerate() {
+            let mut trial = start.clone();
+            apply(&mut trial, &["QBZ1", "QCZ1", "QDZ1", "QEZ1"], alt);
+            let mut r = rep.clone();
+            r.notes.clear();
+            run_steps(ctx, &mut trial, &mut r, Channel::Mz0, &all, &steps)?;
+            rep.notes.push(format!("restart {}: rmse {:.2}", i + 1, r.rmse));
+            if r.rmse < rep.rmse {
+                *params = trial;
+                rep.rmse = r.rmse;
+                rep.iterations += r.iterations;
+            }
+            if good_enough(rep.rmse) {
+                break;
+            }
+        }
+    }
     Ok(Some(StageData { stage: rep.stage.clone(), channel: Channel::Mz0, points: all }))
 }
 
@@ -753,6 +795,11 @@ fn stage_fy_combined(ctx: &Ctx, params: &mut TyreParams, rep: &mut StageReport) 
     if let Some((_, t)) = best {
         *params = t;
     }
+    rep.notes.push(format!(
+        "friction ellipse squareness {:.2} at Fz0 (1 = round, 2 = square; limit {})",
+        checks::ellipse_squareness(params, ctx.nominal.fz0_n, ctx.nominal.p0_pa),
+        checks::SQUARE_LIMIT
+    ));
     Ok(Some(StageData { stage: rep.stage.clone(), channel: Channel::Fy, points: all }))
 }
 
