@@ -602,7 +602,7 @@ fn markdown(r: &Replay, log_name: &str, figs: &[(String, String)]) -> String {
     let _ = writeln!(s, "## Verdict: {}\n", level_name(rep.level));
     let _ = writeln!(s, "| check | level | message |\n|---|---|---|");
     for c in &rep.checks {
-        let _ = writeln!(s, "| {} | {} | {} |", c.check, level_name(c.level), c.message.replace('|', "/"));
+        let _ = writeln!(s, "| {} | {} | {} |", c.check, level_name(c.level), c.message.replace('|', "\\|"));
     }
     let _ = writeln!(s, "\n## Alarms\n");
     if r.alarms.is_empty() {
@@ -611,7 +611,7 @@ fn markdown(r: &Replay, log_name: &str, figs: &[(String, String)]) -> String {
         let _ = writeln!(s, "| rig time s | level | check | message |\n|---|---|---|---|");
         for a in &r.alarms {
             let _ =
-                writeln!(s, "| {:.1} | {} | {} | {} |", a.rig_time_s, a.level, a.check, a.message.replace('|', "/"));
+                writeln!(s, "| {:.1} | {} | {} | {} |", a.rig_time_s, a.level, a.check, a.message.replace('|', "\\|"));
         }
     }
     let _ = writeln!(s, "\n## Wear\n");
