@@ -7,6 +7,7 @@
 use clap::{Parser, Subcommand};
 
 // --- subcommand modules (one per capability) ---
+mod cmd_bench;
 mod cmd_run;
 mod cmd_rig;
 mod cmd_model;
@@ -25,6 +26,9 @@ struct Cli {
 #[derive(Debug, Subcommand)]
 enum Command {
     // --- subcommand variants ---
+    /// Speed figures through real DDS (latency, recorder throughput)
+    #[command(subcommand)]
+    Bench(cmd_bench::BenchCmd),
     /// Run a procedure on the virtual rig, log it to MCAP and print the rig-time summary
     Run(Box<cmd_run::RunArgs>),
     /// Virtual rig: calibration against the thesis
@@ -49,6 +53,7 @@ fn main() -> anyhow::Result<()> {
     node_runtime::logging::init();
     match cli.command {
         // --- subcommand dispatch ---
+        Command::Bench(cmd) => cmd_bench::run(cmd),
         Command::Run(args) => cmd_run::run(*args),
         Command::Rig(cmd) => cmd_rig::run(cmd),
         Command::Model(cmd) => cmd_model::run(cmd),
