@@ -37,7 +37,9 @@ pub enum RigCmd {
 /// Runs a `rig` subcommand.
 pub fn run(cmd: RigCmd) -> anyhow::Result<()> {
     match cmd {
-        RigCmd::Calibrate { json, config, effects, plots } => calibrate(&config, effects.as_deref(), json.as_deref(), plots.as_deref()),
+        RigCmd::Calibrate { json, config, effects, plots } => {
+            calibrate(&config, effects.as_deref(), json.as_deref(), plots.as_deref())
+        }
     }
 }
 
@@ -46,7 +48,8 @@ fn calibrate(config: &Path, effects: Option<&str>, json: Option<&Path>, plots: O
     if let Some(e) = effects {
         cfg.effects = Effects::parse(e).context("--effects")?;
     }
-    let params = TyreParams::read_tir(&cfg.tyre_file).with_context(|| format!("tyre file {}", cfg.tyre_file.display()))?;
+    let params =
+        TyreParams::read_tir(&cfg.tyre_file).with_context(|| format!("tyre file {}", cfg.tyre_file.display()))?;
     let report = rigsim::calibration::run_calibration(&cfg, &params)?;
     println!("Virtual rig calibration ({}; effects: {}; seed {})", config.display(), cfg.effects, cfg.seed);
     print!("{}", rigsim::calibration::format_report(&report));
@@ -137,7 +140,8 @@ fn plot_sweep(path: &Path, name: &str, axis: SweepAxis, o: &SweepOutcome) -> Plo
 
 /// Finite min/max with a little margin (and a non-empty range).
 fn bounds(values: impl Iterator<Item = f64>) -> (f64, f64) {
-    let (lo, hi) = values.filter(|v| v.is_finite()).fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), v| (a.min(v), b.max(v)));
+    let (lo, hi) =
+        values.filter(|v| v.is_finite()).fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), v| (a.min(v), b.max(v)));
     if !lo.is_finite() {
         return (0.0, 1.0);
     }

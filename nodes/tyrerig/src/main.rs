@@ -8,12 +8,12 @@ use clap::{Parser, Subcommand};
 
 // --- subcommand modules (one per capability) ---
 mod cmd_bench;
-mod cmd_run;
-mod cmd_rig;
-mod cmd_model;
 mod cmd_launch;
 mod cmd_mcap;
+mod cmd_model;
 mod cmd_replay;
+mod cmd_rig;
+mod cmd_run;
 mod launch;
 
 #[derive(Debug, Parser)]
