@@ -10,7 +10,12 @@
 //! - **Range**: ±28° and ±30 %. The thesis's 30 °/s sweep went to ±28° (Fig. 3.6.1-B); with
 //!   that range its sweep times (112°/4 °/s = 28 s, 122.27 − 94.3 s cool-down = 27.97 s) and the
 //!   BrkDrv ones (10 %/s: 28.6 − 16.2 = 12.4 s; 40 %/s: 12.23 − 8.8 = 3.43 s) fit ±30 % plus
-//!   a fraction of a second of settling.
+//!   0.4 s of free-rolling reference before the sweep ([`BRKDRV_REFERENCE_HOLD_S`]).
+//! - **BrkDrv variable**: the issue's 10/60 %/s with a 2 % threshold (Table 3.6.2-E's optimum).
+//!   The thesis's measured row is `BrkDrv_sw14` (LR10/HR60 with a 10 % threshold, §3.6.2), a
+//!   longer sweep; so the virtual rig's sweep + cool-down there comes out shorter than the thesis's
+//!   12.72 s and shorter than the 40 %/s sweep's (the thesis's own text calls it 0.5 s shorter,
+//!   its table 0.49 s longer).
 //! - **Load**: 6,000 N for FreeRolling (the graph-sweep nominal load; peak FYW "just over
 //!   6,000 N" in Fig. 3.6.2-J) and 5,000 N for BrkDrv (peak FX ≈ 6,000–6,450 N, Fig. 3.6.2-W).
 //! - **Speed** 16.6 m/s (LONGVL, the procedure's nominal), camber 0°, 2.6 bar.
@@ -84,6 +89,16 @@ impl SlipPath {
     /// A constant-rate sweep to ±`max`.
     pub fn constant(max: f64, rate: f64) -> SlipPath {
         SlipPath::variable(max, rate, rate, 0.0)
+    }
+
+    /// The same path after `hold_s` at zero slip: BrkDrv sweeps start with the free-rolling
+    /// reference (VX1, W1 of the Calspan slip-ratio form, reference §3) recorded at the sweep's
+    /// load case just before the sweep.
+    pub fn with_reference_hold(self, hold_s: f64) -> SlipPath {
+        let h = hold_s.max(0.0);
+        let mut segments = vec![(0.0, h, 0.0, 0.0)];
+        segments.extend(self.segments.into_iter().map(|(t0, t1, s0, s1)| (t0 + h, t1 + h, s0, s1)));
+        SlipPath { segments }
     }
 
     /// Duration [s].
@@ -391,6 +406,10 @@ pub const THESIS_BRKDRV: [Figures; 3] = [
 pub const FREEROLLING_LOAD_N: f64 = 6000.0;
 /// BrkDrv comparison load [N] (see the module doc).
 pub const BRKDRV_LOAD_N: f64 = 5000.0;
+/// Free-rolling reference before each BrkDrv sweep [s]: the thesis's constant-rate BrkDrv
+/// sweeps last 0.4 s longer than their ±30 % paths (10 %/s: 28.6 − 16.2 = 12.4 s for 12 s;
+/// 40 %/s: 12.23 − 8.8 = 3.43 s for 3 s).
+pub const BRKDRV_REFERENCE_HOLD_S: f64 = 0.4;
 /// Comparison belt speed [m/s].
 pub const SPEED_MPS: f64 = 16.6;
 /// Comparison pressure [Pa].
@@ -422,7 +441,8 @@ pub fn brkdrv_setup(kind: SweepKind) -> SweepSetup {
         SweepKind::ConstantLow => SlipPath::constant(0.30, 0.10),
         SweepKind::ConstantHigh => SlipPath::constant(0.30, 0.40),
         SweepKind::Variable => SlipPath::variable(0.30, 0.10, 0.60, 0.02),
-    };
+    }
+    .with_reference_hold(BRKDRV_REFERENCE_HOLD_S);
     SweepSetup {
         name: format!("BrkDrv_{}", kind.name()),
         axis: SweepAxis::Longitudinal,
@@ -466,7 +486,16 @@ pub fn preconditioned_rig(cfg: &RigConfig, params: &TyreParams) -> Result<Virtua
     let heat = heating_sweep();
     settle(&mut rig, &heat, 3.0).map_err(|r| CalibrationError::Refused(heat.name.clone(), r))?;
     let mut sink = Vec::new();
-    run_path(&mut rig, &heat, &mut sink).map_err(|r| CalibrationError::Refused(heat.name.clone(), r))?;
+    // The sweep must end above the baseline so the thermal pause meets 45 °C on the way down;
+    // a tyre the warm-up left cool gets another heating sweep (at most a few).
+    for _ in 0..4 {
+        sink.clear();
+        run_path(&mut rig, &heat, &mut sink).map_err(|r| CalibrationError::Refused(heat.name.clone(), r))?;
+        let tail = &sink[sink.len().saturating_sub(10)..];
+        if tail.iter().map(|s| s.trdtempc_c).sum::<f64>() / tail.len().max(1) as f64 > BASELINE_C + 5.0 {
+            break;
+        }
+    }
     Ok(rig)
 }
 
@@ -532,6 +561,8 @@ pub struct CalibrationReport {
     pub warmup: WarmupCheck,
     /// Wear check.
     pub wear: WearCheck,
+    /// Wear over the thesis's 32-sweep investigation (Table 3.6.2-B; thesis: 1.4 mm).
+    pub investigation_wear: WearCheck,
     /// Every failed criterion, in words; empty when all pass.
     pub failures: Vec<String>,
     /// The sweeps' samples, for plots (not serialised).
@@ -746,31 +777,112 @@ fn radius_at_reference(rig: &mut VirtualRig) -> Result<f64, CalibrationError> {
     Ok(r.iter().sum::<f64>() / r.len().max(1) as f64)
 }
 
-/// Runs the wear check on a fresh rig: warm-up, then the representative procedure.
-pub fn run_wear_check(cfg: &RigConfig, params: &TyreParams) -> Result<WearCheck, CalibrationError> {
+/// The thesis's FreeRolling variable-rate investigation (Table 3.6.2-B, 32 sweeps after the
+/// warm-up), every sweep to ±28° at 6,000 N as the comparison sweeps: the variable-rate graph
+/// sweep (LR4/HR12/TH4) five times, constant rates 4–30 °/s, thresholds 2–10°, low rates 2–8 °/s
+/// and high rates 6–30 °/s. The thesis measured 1.4 mm of wear over it (§3.6.2); that sets
+/// `wear.wear_mm_per_mj`.
+pub fn investigation_freerolling() -> Vec<SweepSetup> {
+    let mk = |name: String, path: SlipPath| SweepSetup {
+        name,
+        axis: SweepAxis::Lateral,
+        path,
+        fz_n: FREEROLLING_LOAD_N,
+        speed_mps: SPEED_MPS,
+        camber_deg: 0.0,
+        pressure_pa: PRESSURE_PA,
+        slip_angle_deg: 0.0,
+        load_coupling: None,
+    };
+    let var = |lr: f64, hr: f64, th: f64| SlipPath::variable(28.0, lr, hr, th);
+    let mut v = vec![mk("sw1".into(), var(4.0, 12.0, 4.0))];
+    for r in [4.0, 6.0, 8.0, 10.0, 12.0, 14.0, 16.0, 18.0, 20.0, 25.0, 30.0] {
+        v.push(mk(format!("sw_const_{r}"), SlipPath::constant(28.0, r)));
+    }
+    for th in [2.0, 4.0, 6.0, 8.0, 10.0] {
+        v.push(mk(format!("sw_th_{th}"), var(4.0, 12.0, th)));
+    }
+    for lr in [2.0, 4.0, 6.0, 8.0] {
+        v.push(mk(format!("sw_lr_{lr}"), var(lr, 12.0, 4.0)));
+    }
+    for hr in [6.0, 8.0, 10.0, 12.0, 14.0, 16.0, 18.0, 20.0, 25.0, 30.0] {
+        v.push(mk(format!("sw_hr_{hr}"), var(4.0, hr, 4.0)));
+    }
+    v.push(mk("sw32".into(), var(4.0, 12.0, 4.0)));
+    v
+}
+
+/// The thesis's GS2MF FreeRolling duration (§4.5) [s]: the representative procedure repeats its
+/// force & moment block until the simulated procedure is this long, the best proxy the thesis
+/// gives for how much sweeping (so sliding energy) the procedure holds.
+pub const GS2MF_FREEROLLING_S: f64 = 4080.0;
+
+/// Runs `sweeps` (each with a thermal pause to 45 °C, 120 s time-out) on a fresh, new tyre after
+/// the warm-up; with `until_s`, keeps cycling the sweeps after the first six (the force & moment
+/// block) until the procedure has lasted that long, then runs the last five (graph sweeps).
+pub fn run_wear_procedure(
+    cfg: &RigConfig,
+    params: &TyreParams,
+    sweeps: &[SweepSetup],
+    until_s: Option<f64>,
+) -> Result<WearCheck, CalibrationError> {
     let mut rig = VirtualRig::new(cfg.clone(), params.clone(), cfg.seed)?;
     let t_start = rig.time_s();
     run_warmup(&mut rig, 2)?;
     let r0 = radius_at_reference(&mut rig)?;
     let worn0 = rig.truth().tread_worn_mm;
     let e0 = rig.truth().sliding_energy_j;
-    let sweeps = representative_freerolling(params.fnomin_n());
-    for s in &sweeps {
-        settle(&mut rig, s, 3.0).map_err(|r| CalibrationError::Refused(s.name.clone(), r))?;
-        let o = run_sweep(&mut rig, s, BASELINE_C, 120.0).map_err(|r| CalibrationError::Refused(s.name.clone(), r))?;
-        drop(o.samples);
+    let run = |rig: &mut VirtualRig, s: &SweepSetup| -> Result<(), CalibrationError> {
+        settle(rig, s, 3.0).map_err(|r| CalibrationError::Refused(s.name.clone(), r))?;
+        run_sweep(rig, s, BASELINE_C, 120.0).map_err(|r| CalibrationError::Refused(s.name.clone(), r))?;
+        Ok(())
+    };
+    let mut count = 0;
+    match until_s {
+        Some(end) if sweeps.len() > 11 => {
+            let (head, rest) = sweeps.split_at(6);
+            let (block, tail) = rest.split_at(rest.len() - 5);
+            for s in head {
+                run(&mut rig, s)?;
+                count += 1;
+            }
+            // Reserve the graph sweeps' share of the time (their length in the first pass).
+            let mut i = 0;
+            let reserve = 5.0 * 60.0;
+            while rig.time_s() - t_start < end - reserve {
+                run(&mut rig, &block[i % block.len()])?;
+                i += 1;
+                count += 1;
+            }
+            for s in tail {
+                run(&mut rig, s)?;
+                count += 1;
+            }
+        }
+        _ => {
+            for s in sweeps {
+                run(&mut rig, s)?;
+                count += 1;
+            }
+        }
     }
     let r1 = radius_at_reference(&mut rig)?;
     let truth = rig.truth();
     let loss = truth.tread_worn_mm - worn0;
     Ok(WearCheck {
-        sweeps: sweeps.len(),
+        sweeps: count,
         sliding_energy_mj: (truth.sliding_energy_j - e0) * 1e-6,
         tread_loss_mm: loss,
         measured_radius_loss_mm: (r0 - r1) * 1e3,
         procedure_s: rig.time_s() - t_start,
         pass: (1.0..=3.0).contains(&loss),
     })
+}
+
+/// The wear check: the representative GS2MF FreeRolling, its force & moment block repeated to
+/// the thesis's 4,080 s.
+pub fn run_wear_check(cfg: &RigConfig, params: &TyreParams) -> Result<WearCheck, CalibrationError> {
+    run_wear_procedure(cfg, params, &representative_freerolling(params.fnomin_n()), Some(GS2MF_FREEROLLING_S))
 }
 
 /// Runs the whole calibration: both tables, the warm-up check and the wear check.
@@ -809,10 +921,11 @@ pub fn run_calibration(cfg: &RigConfig, params: &TyreParams) -> Result<Calibrati
         failures.push(format!("warm-up: {:.1} °C after two blocks, want 40–45 °C", warmup.after_block2_c));
     }
     let wear = run_wear_check(cfg, params)?;
+    let investigation_wear = run_wear_procedure(cfg, params, &investigation_freerolling(), None)?;
     if !wear.pass {
         failures.push(format!("wear: {:.2} mm over the representative procedure, want 1–3 mm", wear.tread_loss_mm));
     }
-    Ok(CalibrationReport { freerolling, brkdrv, warmup, wear, failures, outcomes })
+    Ok(CalibrationReport { freerolling, brkdrv, warmup, wear, investigation_wear, failures, outcomes })
 }
 
 /// The report as a table for people.
@@ -854,8 +967,14 @@ pub fn format_report(r: &CalibrationReport) -> String {
     let x = &r.wear;
     let _ = writeln!(
         s,
-        "Wear over a representative GS2MF FreeRolling ({} sweeps, {:.0} s, {:.2} MJ sliding): {:.2} mm tread (DSTWOWHC {:.1} mm; want 1–3 mm)",
+        "Wear over a representative GS2MF FreeRolling ({} sweeps, {:.0} s, {:.2} MJ sliding): {:.2} mm tread (DSTWOWHC −{:.1} mm; want 1–3 mm)",
         x.sweeps, x.procedure_s, x.sliding_energy_mj, x.tread_loss_mm, x.measured_radius_loss_mm
+    );
+    let x = &r.investigation_wear;
+    let _ = writeln!(
+        s,
+        "Wear over the thesis's FreeRolling investigation (Table 3.6.2-B, {} sweeps, {:.0} s, {:.2} MJ): {:.2} mm (thesis 1.4 mm; sets wear_mm_per_mj)",
+        x.sweeps, x.procedure_s, x.sliding_energy_mj, x.tread_loss_mm
     );
     if r.failures.is_empty() {
         let _ = writeln!(s, "PASS: every criterion met");

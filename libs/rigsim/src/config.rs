@@ -448,22 +448,22 @@ pub struct ThermalParams {
 impl Default for ThermalParams {
     fn default() -> Self {
         Self {
-            surface_heat_capacity_j_per_k: 8000.0,
-            bulk_heat_capacity_j_per_k: 30000.0,
-            surface_bulk_conductance_w_per_k: 36.0,
-            convection_w_per_k: 10.6,
-            convection_speed_w_per_k: 1.66,
-            belt_contact_w_per_k: 25.6,
-            bulk_to_air_w_per_k: 32.0,
-            surface_fraction_lateral: 0.4,
-            surface_fraction_longitudinal: 0.09,
-            bulk_fraction_lateral: 0.4,
-            bulk_fraction_longitudinal: 0.21,
-            rolling_loss_coefficient: 0.0167,
-            flash_lateral_k_per_kw: 1.0,
-            flash_longitudinal_k_per_kw: 1.5,
-            flash_time_constant_s: 1.0,
-            flash_longitudinal_time_constant_s: 0.5,
+            surface_heat_capacity_j_per_k: 5660.0,
+            bulk_heat_capacity_j_per_k: 11140.0,
+            surface_bulk_conductance_w_per_k: 44.38,
+            convection_w_per_k: 9.369,
+            convection_speed_w_per_k: 1.11,
+            belt_contact_w_per_k: 63.42,
+            bulk_to_air_w_per_k: 40.87,
+            surface_fraction_lateral: 0.5146,
+            surface_fraction_longitudinal: 0.1843,
+            bulk_fraction_lateral: 0.312,
+            bulk_fraction_longitudinal: 0.2705,
+            rolling_loss_coefficient: 0.02618,
+            flash_lateral_k_per_kw: 0.9606,
+            flash_longitudinal_k_per_kw: 1.626,
+            flash_time_constant_s: 0.762,
+            flash_longitudinal_time_constant_s: 0.5472,
             camber_zone_share_per_deg: 0.05,
         }
     }
@@ -513,7 +513,7 @@ pub struct WearParams {
 
 impl Default for WearParams {
     fn default() -> Self {
-        Self { wear_mm_per_mj: 0.18, stiffness_gain_per_mm: 0.04, shape_gain_per_mm: 0.02 }
+        Self { wear_mm_per_mj: 0.208, stiffness_gain_per_mm: 0.04, shape_gain_per_mm: 0.02 }
     }
 }
 

@@ -59,6 +59,7 @@ fn calibrate(config: &Path, effects: Option<&str>, json: Option<&Path>, plots: O
             "brkdrv": report.brkdrv,
             "warmup": report.warmup,
             "wear": report.wear,
+            "investigation_wear": report.investigation_wear,
             "pass": report.pass(),
             "failures": report.failures,
         });
