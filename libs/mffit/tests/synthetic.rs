@@ -38,3 +38,30 @@ fn full_fit_recovers_the_true_tyre() {
     assert!(get("MZ pure") < 2.0);
     assert!(get("MX pure") < 5.0);
 }
+
+#[test]
+fn every_stage_recovers_noise_free_data() {
+    let tyre = truth();
+    let data = synth::gs2mf(&tyre, SynthOptions { rate_hz: 20.0, noise: synth::Noise::OFF, ..SynthOptions::default() });
+    let result = fit(&data, &FitOptions { max_points: 1500, ..FitOptions::default() }).expect("fit");
+    let m = mffit::metrics::all(&result.params, &result.data, result.nominal.fz0_n);
+    for s in m.iter().filter(|m| m.group == "all") {
+        eprintln!("{:<18} {:>8.3} % of peak", s.stage, s.nrmse_pct);
+        // Each stage reproduces its own (noise-free) data to within what 10 Hz averaging of
+        // the fast (30 °/s) sweep parts leaves; relaxation to the step-steer sampling. The
+        // combined FY/MZ stages carry the pure fits into ±5° camber the free-rolling data did
+        // not reach (and MZ combined has only SSZ1–4 of its own), so they get more room.
+        let limit = match s.stage.as_str() {
+            "relaxation" => 3.0,
+            "mz_combined" => 6.0,
+            "fy_combined" => 2.0,
+            _ => 1.0,
+        };
+        assert!(s.nrmse_pct < limit, "{}: {:.3} %", s.stage, s.nrmse_pct);
+    }
+    // Well-identified coefficients come back close to the true ones.
+    for (k, tol) in [("PDY1", 0.03), ("PDX1", 0.03), ("QDZ1", 0.05), ("PCX1", 0.05), ("VERTICAL_STIFFNESS", 0.02)] {
+        let (t, f) = (tyre.get(k).unwrap(), result.params.get(k).unwrap());
+        assert!(((f - t) / t).abs() < tol, "{k}: true {t}, fitted {f}");
+    }
+}
