@@ -55,13 +55,26 @@ pub struct DataOptions {
     pub min_load_n: f64,
     /// Sliding power below which the lasers read the grip temperature without flash [W].
     pub quiet_power_w: f64,
+    /// Window of the input smoother (slip angle, slip ratio, load, camber, pressure, speed) [s];
+    /// 0 = raw inputs.
+    pub input_smoothing_s: f64,
+    /// How long the flash temperature outlives sliding [s] (a few flash time constants).
+    pub quiet_memory_s: f64,
     /// Most points kept (evenly thinned beyond it, so a full GS2MF log stays tractable).
     pub max_points: usize,
 }
 
 impl Default for DataOptions {
     fn default() -> Self {
-        Self { point_rate_hz: 10.0, min_speed_mps: 3.0, min_load_n: 300.0, quiet_power_w: 1500.0, max_points: 8000 }
+        Self {
+            point_rate_hz: 10.0,
+            min_speed_mps: 3.0,
+            min_load_n: 300.0,
+            quiet_power_w: 1500.0,
+            input_smoothing_s: 0.1,
+            quiet_memory_s: 0.5,
+            max_points: 8000,
+        }
     }
 }
 
@@ -300,10 +313,21 @@ impl Dataset {
         Ok(())
     }
 
-    /// Sliding power and energy, grip temperature, slip rates.
+    /// Input smoothing, sliding power and energy, grip temperature, slip rates.
     fn derive(&mut self, opt: &DataOptions) {
         let s = &mut self.series;
         let n = s.len();
+        // Errors in variables: the model is evaluated at the measured inputs, whose sensor noise
+        // (0.01° of slip angle is ~20 N of FY near zero slip; 0.0003 of slip ratio ~50 N of FX)
+        // would otherwise pass through the model into the residual, and any candidate that
+        // low-passes an input (relaxation) would "explain" it. A quadratic Savitzky–Golay
+        // smoother over ~0.1 s removes most of it without biasing ramps or rounded peaks.
+        if opt.input_smoothing_s > 0.0 {
+            let t = s.t_s.clone();
+            for v in [&mut s.alpha_deg, &mut s.kappa, &mut s.fz_n, &mut s.gamma_deg, &mut s.p_pa, &mut s.v_mps] {
+                *v = savitzky_golay2(&t, v, opt.input_smoothing_s);
+            }
+        }
         s.sliding_power_w = (0..n)
             .map(|i| {
                 let (sa, ca) = s.alpha_deg[i].to_radians().sin_cos();
@@ -326,9 +350,20 @@ impl Dataset {
             })
             .collect();
         // Grip temperature: laser mean at quiet moments, linearly interpolated in time through
-        // sliding, then a 0.5 s low-pass against laser noise.
-        let quiet: Vec<usize> =
-            (0..n).filter(|&i| s.temp_laser_c[i].is_finite() && s.sliding_power_w[i] < opt.quiet_power_w).collect();
+        // sliding, then a 0.5 s low-pass against laser noise. The flash temperature the lasers
+        // see outlives the sliding by a few tenths of a second (longer in the rolling direction),
+        // so "quiet" means the sliding power low-passed over `quiet_memory_s` is low — a fast
+        // sweep's zero crossing is not quiet.
+        let mut p_lp = 0.0;
+        let quiet: Vec<usize> = (0..n)
+            .filter(|&i| {
+                let dt = if i > 0 { (s.t_s[i] - s.t_s[i - 1]).clamp(0.0, 1.0) } else { 0.0 };
+                let p = s.sliding_power_w[i];
+                // Peak-following low-pass: rises at once, decays with the flash memory.
+                p_lp = p.max(p_lp * (-dt / opt.quiet_memory_s).exp());
+                s.temp_laser_c[i].is_finite() && p_lp < opt.quiet_power_w
+            })
+            .collect();
         let mut tg = vec![f64::NAN; n];
         if !quiet.is_empty() {
             let mut q = 0usize;
@@ -394,6 +429,40 @@ impl Dataset {
         }
         if hi >= lo { hi - lo } else { 0.0 }
     }
+}
+
+/// Quadratic Savitzky–Golay smoothing over a centred window of about `window_s`, only where the
+/// whole window is evenly sampled (gaps and ends keep the raw value). Exact for quadratics.
+fn savitzky_golay2(t: &[f64], y: &[f64], window_s: f64) -> Vec<f64> {
+    let n = y.len();
+    if n < 5 {
+        return y.to_vec();
+    }
+    let dt = {
+        let mut d: Vec<f64> = t.windows(2).map(|w| w[1] - w[0]).filter(|d| *d > 0.0).take(1000).collect();
+        d.sort_by(f64::total_cmp);
+        if d.is_empty() {
+            return y.to_vec();
+        }
+        d[d.len() / 2]
+    };
+    let m = ((window_s / 2.0 / dt).round() as usize).clamp(2, 50);
+    let mf = m as f64;
+    let den = (2.0 * mf + 3.0) * (2.0 * mf + 1.0) * (2.0 * mf - 1.0);
+    let c: Vec<f64> = (0..=m).map(|i| 3.0 * (3.0 * mf * mf + 3.0 * mf - 1.0 - 5.0 * (i * i) as f64) / den).collect();
+    let mut out = y.to_vec();
+    for i in m..n.saturating_sub(m) {
+        let span = t[i + m] - t[i - m];
+        if (span - 2.0 * mf * dt).abs() > 0.5 * dt || !(i - m..=i + m).all(|j| y[j].is_finite()) {
+            continue;
+        }
+        let mut acc = c[0] * y[i];
+        for k in 1..=m {
+            acc += c[k] * (y[i - k] + y[i + k]);
+        }
+        out[i] = acc;
+    }
+    out
 }
 
 fn stamp_s(st: &ProcedureState) -> f64 {

@@ -233,7 +233,13 @@ pub fn markdown(
             let _ = writeln!(
                 m,
                 "| {} | {} | {} | {:.2} | {:.2} | {:.2} | {:.2} |",
-                b.variable, b.bin, b.n, r[0], r[1], r[2], r[3]
+                b.variable.replace('|', "\\|"),
+                b.bin,
+                b.n,
+                r[0],
+                r[1],
+                r[2],
+                r[3]
             );
         }
     }

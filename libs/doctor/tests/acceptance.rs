@@ -64,13 +64,15 @@ fn run_case(name: &str, c: &Case) -> (Diagnosis, TyreParams, Dataset) {
         );
     }
     if dx.named.is_empty() {
-        let best = dx.rounds[0].iter().filter(|c| c.testable).map(|c| (c.effect, c.evidence)).fold(
-            None,
-            |a: Option<(Effect, f64)>, b| {
-                if a.is_none_or(|a| b.1 > a.1) { Some(b) } else { a }
-            },
-        );
-        eprintln!("| {name} | none | – | {best:?} | – | – | – | – | {wall:.1} s |");
+        let best = dx
+            .rounds
+            .first()
+            .into_iter()
+            .flatten()
+            .filter(|c| c.testable)
+            .max_by(|a, b| a.evidence.total_cmp(&b.evidence))
+            .map_or("–".to_owned(), |c| format!("{} {:.3}", c.effect.name(), c.evidence));
+        eprintln!("| {name} | none | – | {best} | – | – | – | – | {wall:.1} s | {} |", dx.stop_reason);
     }
     (dx, base, ds)
 }
