@@ -231,3 +231,28 @@ fn written_tir_reads_back_and_evaluates_the_same() {
     assert!(json["wall_time_s"].as_f64().unwrap() > 0.0);
     assert!(dir.path().join("friction_ellipse.png").exists());
 }
+
+#[test]
+fn robust_loss_resists_outliers() {
+    let t = truth();
+    let mut pts = grid_points(&t, Channel::Fy0);
+    for p in pts.iter_mut() {
+        p.measured = Channel::Fy0.eval(&t, &p.input);
+    }
+    // Every 10th point is a gross outlier (a spike of 3 kN).
+    for p in pts.iter_mut().step_by(10) {
+        p.measured += 3000.0;
+    }
+    let keys: &[&'static str] = &["PDY1", "PKY1", "PCY1", "PEY1"];
+    let scale = 100.0;
+    let err = |robust: Option<f64>| {
+        let mut p = t.clone();
+        mffit::engine::apply(&mut p, keys, &[0.9, 20.0, 1.3, -0.5]);
+        let s = mffit::fit::StepSettings { robust, max_iterations: 200, threads: 1 };
+        mffit::fit::fit_step("test", &mut p, keys, &pts, Channel::Fy0, scale, &s).unwrap();
+        (p.get("PDY1").unwrap() - t.get("PDY1").unwrap()).abs()
+    };
+    let plain = err(None);
+    let robust = err(Some(2.0));
+    assert!(robust < 0.2 * plain, "robust {robust} vs plain {plain}");
+}
