@@ -17,6 +17,8 @@ use crate::wear::{self, Hold, HoldAcc, MatchTol, WearFit};
 
 /// A state stamped further than this ahead of the latest sample is applied at once [s].
 const FUTURE_STATE_S: f64 = 1.0;
+/// A specimen with less sliding energy than this has not been tested (sensor noise only) [J].
+const MIN_SPECIMEN_ENERGY_J: f64 = 10_000.0;
 /// The highest load GS2MF asks for, as a factor of Fz0 (BrkDrv, thesis §3.3).
 const GS2MF_MAX_LOAD_FACTOR: f64 = 2.25;
 
@@ -134,6 +136,7 @@ pub struct MonitorCore {
 
     // thermal
     hot_starts: u32,
+    sweeps_seen: u32,
 }
 
 impl MonitorCore {
@@ -201,6 +204,7 @@ impl MonitorCore {
             noise_floor: None,
             chatter_worst_n: 0.0,
             hot_starts: 0,
+            sweeps_seen: 0,
         })
     }
 
@@ -228,7 +232,7 @@ impl MonitorCore {
     /// rig [mm].
     pub fn wear_by_specimen_mm(&self) -> Vec<f64> {
         let mut v = self.specimen_wear_mm.clone();
-        if self.energy() > 0.0 {
+        if self.wear.wear_mm.is_finite() || self.energy() > MIN_SPECIMEN_ENERGY_J {
             v.push(self.wear.wear_mm);
         }
         v
@@ -276,25 +280,23 @@ impl MonitorCore {
     pub fn on_sweep_summary(&mut self, s: &SweepSummary) -> MonitorOutput {
         let t = s.header.stamp.as_secs_f64();
         if !s.cool_down_complete {
+            self.sweeps_seen += 1;
             if s.started_hot {
                 self.hot_starts += 1;
+                let pct = f64::from(self.hot_starts) / f64::from(self.sweeps_seen) * 100.0;
+                let mut lvl = self.cfg.hot_starts_pct.level(pct).max(QualityCheck::WARN);
+                if self.hot_starts < self.cfg.hot_starts_error_min {
+                    lvl = lvl.min(QualityCheck::WARN);
+                }
                 let msg = format!(
-                    "sweep {} started hot at {:.1} °C (the thermal gate timed out); {} hot start(s) so far",
-                    s.sweep_name, s.start_temp_c, self.hot_starts
+                    "sweep {} started hot at {:.1} °C (the thermal gate timed out); {} of {} sweeps ({pct:.0} %) \
+                     started hot so far",
+                    s.sweep_name, s.start_temp_c, self.hot_starts, self.sweeps_seen
                 );
-                let lvl = self.cfg.hot_starts.level(f64::from(self.hot_starts)).max(QualityCheck::WARN);
                 // Every hot start is an event the control room should see.
                 self.push_alarm(lvl, "thermal_timeout", &msg, t);
-                self.set(
-                    "thermal_timeout",
-                    lvl,
-                    msg,
-                    f64::from(self.hot_starts),
-                    self.cfg.hot_starts.warn,
-                    "sweeps",
-                    t,
-                    false,
-                );
+                let thr = self.cfg.hot_starts_pct.error;
+                self.set("thermal_timeout", lvl, msg, pct, thr, "% of sweeps", t, false);
             }
             self.break_in(s, t);
         }
@@ -527,7 +529,8 @@ impl MonitorCore {
     }
 
     fn new_specimen(&mut self) {
-        if self.energy() > 0.0 {
+        // The first mounting (nothing run yet) is no specimen taken off.
+        if self.wear.wear_mm.is_finite() || self.energy() > MIN_SPECIMEN_ENERGY_J {
             self.specimen_wear_mm.push(self.wear.wear_mm);
         }
         self.holds.clear();
@@ -746,7 +749,7 @@ impl MonitorCore {
             })
             .map(|(_, p)| *p)
             .collect();
-        if typ.iter().any(|p| p.contains("OnCentre") || p.contains("RollingRadius") || p.contains("Static")) {
+        if !self.cfg.break_in_sweep_types.iter().any(|k| s.sweep_name.contains(k.as_str())) {
             return;
         }
         let key = format!(
@@ -770,7 +773,7 @@ impl MonitorCore {
         let rising = rise_total > self.cfg.break_in_rise_pct && rise_last > self.cfg.break_in_stable_pct;
         if rising {
             let msg = format!(
-                "grip still rising: peak |F|/Fz {:+.1} % over {n} repeats of {} (last {:+.1} %) — the tyre is not \
+                "grip still rising: peak force / load {:+.1} % over {n} repeats of {} (last {:+.1} %) — the tyre is not \
                  broken in (thesis: +14.2 % over five sweeps of a new tyre)",
                 rise_total,
                 typ.join("_"),

@@ -17,6 +17,9 @@
 //! Checks ([`core::CHECKS`]): `load_rating`, `wear`, `graph_sweep_drift`, `break_in`, `chatter`,
 //! `thermal_timeout`; thresholds in [`MonitorConfig`] with their thesis sources.
 //!
+//! `shell` (feature `dds`, on by default) runs both cores in one DDS node through [`Pipeline`],
+//! in the same order as a headless run and a replay.
+//!
 //! [`report`] replays an MCAP log through the channels and monitor cores and writes the
 //! Markdown report with plots (`tyrerig report`).
 
@@ -25,6 +28,8 @@ pub mod core;
 pub mod drift;
 pub mod pipeline;
 pub mod report;
+#[cfg(feature = "dds")]
+pub mod shell;
 pub mod wear;
 
 pub use config::{ConfigError, Levels, MonitorConfig, TyreInfo};

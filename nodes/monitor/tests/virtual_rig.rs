@@ -67,6 +67,7 @@ struct Live {
     wear_mm: f64,
     section_times: Vec<(f64, String)>,
     truth_wear_at_section: Vec<f64>,
+    specimens_mm: Vec<f64>,
 }
 
 fn live(
@@ -88,10 +89,11 @@ fn live(
         alarms: Vec::new(),
         derived: Vec::new(),
         digests: Vec::new(),
-        end: common::RunEnd { end_time_s: 0.0, tread_worn_mm: 0.0, completed: false },
+        end: common::RunEnd { end_time_s: 0.0, tread_worn_mm: 0.0, completed: false, specimens_worn_mm: Vec::new() },
         wear_mm: f64::NAN,
         section_times: Vec::new(),
         truth_wear_at_section: Vec::new(),
+        specimens_mm: Vec::new(),
     };
     let end = common::run(opts, &mut |ev, rig| match ev {
         common::Ev::State(st) => {
@@ -133,6 +135,7 @@ fn live(
     out.alarms.extend(o.alarms);
     out.derived.extend(o.derived);
     out.wear_mm = p.monitor.wear().wear_mm;
+    out.specimens_mm = p.monitor.wear_by_specimen_mm();
     out.end = end;
     if let Some(l) = log {
         l.log.finish().unwrap();
@@ -326,4 +329,23 @@ fn five_times_the_wear_rate_raises_the_wear_alarm_before_graph_sweep_2() {
         l.wear_mm,
         l.truth_wear_at_section.last().unwrap()
     );
+}
+
+/// The whole GS2MF suite (FreeRolling and StaticLong on specimen A, BrkDrv on B, tyre changes):
+/// no ERROR, and each specimen's wear within ±0.3 mm of the truth.
+#[test]
+fn full_gs2mf_suite_has_no_error_and_wear_per_specimen() {
+    let opts = common::Opts { procedure_file: "gs2mf.toml", ..common::Opts::default() };
+    let l = live(&opts, None, &mut |_, _| false);
+    assert!(l.end.completed);
+    let errors: Vec<&Alarm> = l.alarms.iter().filter(|a| a.level == "ERROR").collect();
+    for a in &l.alarms {
+        println!("{} {} {:.0} s: {}", a.level, a.check, a.rig_time_s, a.message);
+    }
+    assert!(errors.is_empty(), "{errors:#?}");
+    println!("wear per specimen: monitor {:?}, truth {:?}", l.specimens_mm, l.end.specimens_worn_mm);
+    assert_eq!(l.specimens_mm.len(), l.end.specimens_worn_mm.len());
+    for (m, t) in l.specimens_mm.iter().zip(&l.end.specimens_worn_mm) {
+        assert!((m - t).abs() <= 0.3, "{m} vs {t}");
+    }
 }
