@@ -286,6 +286,11 @@ pub fn relaxation_length(disp_m: &[f64], fy_n: &[f64], saturated_frac: f64) -> O
     Some(RelaxationResult { length_m: d63 - d0, d63_m: d63 - x0, d0_m: d0 - x0, saturated_fy_n: sat })
 }
 
+/// A static drag's linear part must span at least this displacement [m].
+const MIN_DRAG_DISPLACEMENT_M: f64 = 0.002;
+/// …and be a line: coefficient of determination at least this.
+const MIN_DRAG_R2: f64 = 0.9;
+
 /// Longitudinal stiffness from one static drag (thesis §3.12.2): the slope of FX vs belt
 /// displacement, fitted where |FX| is below `linear_frac` of the drag's peak |FX| (beyond, the
 /// patch slides). Returned positive [N/m].
@@ -294,9 +299,25 @@ pub fn longitudinal_stiffness(disp_m: &[f64], fx_n: &[f64], linear_frac: f64) ->
     if peak <= 0.0 {
         return None;
     }
-    let (xs, ys): (Vec<f64>, Vec<f64>) =
-        disp_m.iter().zip(fx_n).filter(|(_, f)| f.abs() <= linear_frac * peak).map(|(x, f)| (*x, *f)).unzip();
+    let (xs, ys): (Vec<f64>, Vec<f64>) = disp_m
+        .iter()
+        .zip(fx_n)
+        .filter(|(x, f)| x.is_finite() && f.abs() <= linear_frac * peak)
+        .map(|(x, f)| (*x, *f))
+        .unzip();
+    // A drag the displacement channel did not see (e.g. a belt speed that reads zero with the
+    // wheel locked) gives a cloud, not a line: refuse it rather than report noise.
+    let span = xs.iter().copied().fold(f64::NEG_INFINITY, f64::max) - xs.iter().copied().fold(f64::INFINITY, f64::min);
+    if span.is_nan() || span < MIN_DRAG_DISPLACEMENT_M {
+        return None;
+    }
     let l = fit_line(&xs, &ys)?;
+    let my = ys.iter().sum::<f64>() / ys.len() as f64;
+    let ss_tot: f64 = ys.iter().map(|y| (y - my).powi(2)).sum();
+    let ss_res: f64 = xs.iter().zip(&ys).map(|(x, y)| (y - l.at(*x)).powi(2)).sum();
+    if ss_tot <= 0.0 || 1.0 - ss_res / ss_tot < MIN_DRAG_R2 {
+        return None;
+    }
     let k = l.slope.abs();
     (k.is_finite() && k > 0.0).then_some(k)
 }
@@ -511,6 +532,9 @@ mod tests {
         let fx: Vec<f64> = xs.iter().map(|x| -(4.0e5 * x).min(6000.0)).collect();
         assert_relative_eq!(longitudinal_stiffness(&xs, &fx, 0.5).unwrap(), 4.0e5, max_relative = 1e-9);
         assert!(longitudinal_stiffness(&xs, &vec![0.0; xs.len()], 0.5).is_none());
+        // Displacement not seen (noise around zero): refused.
+        let noise: Vec<f64> = (0..=100).map(|i| 1e-4 * f64::from(i % 7) - 3e-4).collect();
+        assert!(longitudinal_stiffness(&noise, &fx, 0.5).is_none());
     }
 
     #[test]

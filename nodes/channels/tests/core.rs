@@ -170,3 +170,47 @@ fn bad_samples_do_not_poison() {
     assert_eq!(f.sweep_summaries.len(), 2);
     assert!(f.sweep_summaries[0].peak_temp_c == 45.0);
 }
+
+/// Static drags (thesis §3.12.2): the wheel locked, the belt moved ~0.1 m; FX is a spring up to
+/// the friction limit. The section's end gives the stiffness, averaged over the repeats.
+#[test]
+fn static_drags_give_the_longitudinal_stiffness_averaged_over_repeats() {
+    let mut c = ChannelsCore::new(ChannelsConfig::default()).unwrap();
+    let (cx, limit, v_belt) = (4.0e5, 5000.0, 0.05);
+    let mut t = 0.0;
+    let mut seq = 0;
+    let mut derived = Vec::new();
+    for rep in 0..4u32 {
+        c.on_procedure_state(&state(
+            t,
+            ProcedureState::PHASE_SWEEP,
+            "static_long_2.6bar",
+            "Static_sw1_StaticDrag_D0.1_1",
+            rep,
+        ));
+        let (mut x, mut v_prev) = (0.0, 0.0);
+        for i in 0..400 {
+            t += 0.01;
+            seq += 1;
+            let mut s = sample(t, seq);
+            s.rig_mode = RigSetpoint::MODE_STATIC;
+            s.wheel_speed_radps = 0.0;
+            // Belt still for 0.5 s, then moving.
+            s.trajvelw_mps = if i < 50 { 0.0 } else { v_belt };
+            // The belt's displacement as the rig's belt integrates it (a ramp in speed).
+            x += 0.5 * (v_prev + s.trajvelw_mps) * 0.01;
+            v_prev = s.trajvelw_mps;
+            s.fx_n = -(cx * x).min(limit) + if i % 2 == 0 { 20.0 } else { -20.0 };
+            derived.extend(c.on_sample(&s).derived);
+        }
+        c.on_procedure_state(&state(t, ProcedureState::PHASE_SETTLE, "static_long_2.6bar", "", rep));
+    }
+    c.on_procedure_state(&state(t, ProcedureState::PHASE_COMPLETE, "static_long_2.6bar", "", 0));
+    t += 0.01;
+    derived.extend(c.on_sample(&sample(t, seq + 1)).derived);
+    derived.extend(c.finish().derived);
+    let k: Vec<_> = derived.iter().filter(|d| d.quantity == channels::Quantity::LongitudinalStiffness).collect();
+    assert_eq!(k.len(), 1, "{derived:?}");
+    assert_eq!(k[0].n_points, 4);
+    assert_relative_eq!(k[0].value, cx, max_relative = 0.03);
+}
