@@ -2,32 +2,16 @@ use rigsim::calibration::*;
 fn main() {
     let cfg = rigsim::RigConfig::load(std::path::Path::new("launch-config/virtual_rig.toml")).unwrap();
     let p = rigsim::TyreParams::read_tir(&cfg.tyre_file).unwrap();
-    let which = std::env::args().nth(1).unwrap_or("fr".into());
-    let kind = match std::env::args().nth(2).as_deref() {
-        Some("low") => SweepKind::ConstantLow,
-        Some("var") => SweepKind::Variable,
-        _ => SweepKind::ConstantHigh,
-    };
-    let s = if which == "fr" { freerolling_setup(kind) } else { brkdrv_setup(kind) };
     let pre = preconditioned_rig(&cfg, &p).unwrap();
-    let o = comparison_sweep(&pre, &s).unwrap();
-    let mut prev: Option<&rigsim::RigSample> = None;
-    for x in &o.samples {
-        let sl = if which == "fr" { x.slipangl_deg } else { x.longslip * 100.0 };
-        if let Some(pv) = prev {
-            let ps = if which == "fr" { pv.slipangl_deg } else { pv.longslip * 100.0 };
-            if ps.signum() != sl.signum() && x.runtime_s < o.start_time_s + o.sweep_s + 0.3 {
-                println!(
-                    "t {:.3} slip {:.4} -> {:.4}  fy {:.0} fx {:.0}",
-                    x.runtime_s - o.start_time_s,
-                    ps,
-                    sl,
-                    x.fyw_n,
-                    x.fx_n
-                );
-            }
-        }
-        prev = Some(x);
+    for kind in SweepKind::ALL {
+        let s = freerolling_setup(kind);
+        let mut rig = pre.clone();
+        let mut sink = Vec::new();
+        thermal_pause(&mut rig, &s, BASELINE_C, 300.0, &mut sink).unwrap();
+        let (mut gmin, mut tmax) = (1.0f64, 0.0f64);
+        let t0 = rig.time_s();
+        let n = (s.path.duration_s() * 100.0) as usize;
+        for k in 0..=n { let t = k as f64 / 100.0; let mut sp = rigsim::RigSetpoint { mode: 0, slip_angle_deg: s.path.at(t), fz_n: s.fz_n, pressure_pa: s.pressure_pa, speed_mps: s.speed_mps, ..Default::default() }; sp.camber_deg = 0.0; rig.apply_setpoint(&sp).unwrap(); rig.run_until(t0 + t + 0.01, &mut |_| {}); let tr = rig.truth(); gmin = gmin.min(tr.grip_factor); tmax = tmax.max(tr.grip_temp_c); }
+        println!("{:?}: min grip factor {gmin:.3}, max grip temp {tmax:.1}", kind);
     }
-    println!("hyst {:.0} peak {:.1} cool {:.1}", o.hysteresis_n, o.peak_temp_c, o.cool_s);
 }

@@ -11,11 +11,11 @@
 //!   that range its sweep times (112°/4 °/s = 28 s, 122.27 − 94.3 s cool-down = 27.97 s) and the
 //!   BrkDrv ones (10 %/s: 28.6 − 16.2 = 12.4 s; 40 %/s: 12.23 − 8.8 = 3.43 s) fit ±30 % plus
 //!   0.4 s of free-rolling reference before the sweep ([`BRKDRV_REFERENCE_HOLD_S`]).
-//! - **BrkDrv variable**: the issue's 10/60 %/s with a 2 % threshold (Table 3.6.2-E's optimum).
-//!   The thesis's measured row is `BrkDrv_sw14` (LR10/HR60 with a 10 % threshold, §3.6.2), a
-//!   longer sweep; so the virtual rig's sweep + cool-down there comes out shorter than the thesis's
-//!   12.72 s and shorter than the 40 %/s sweep's (the thesis's own text calls it 0.5 s shorter,
-//!   its table 0.49 s longer).
+//! - **BrkDrv variable**: 10/60 %/s with a **10 %** threshold, the sweep the thesis measured for
+//!   Table 3.6.2-I (`BrkDrv_sw14`, see [`BRKDRV_VARIABLE_THRESHOLD`]), not the 2 % optimum of
+//!   Table 3.6.2-E: the 2 % sweep is ~2.7 s shorter and carries a third less energy, so its
+//!   sweep + cool-down cannot match the 12.72 s the thesis timed on sw14. The 2 % optimum is run
+//!   and printed beside the table, ungraded.
 //! - **Load**: 6,000 N for FreeRolling (the graph-sweep nominal load; peak FYW "just over
 //!   6,000 N" in Fig. 3.6.2-J) and 5,000 N for BrkDrv (peak FX ≈ 6,000–6,450 N, Fig. 3.6.2-W).
 //! - **Speed** 16.6 m/s (LONGVL, the procedure's nominal), camber 0°, 2.6 bar.
@@ -406,6 +406,24 @@ pub const THESIS_BRKDRV: [Figures; 3] = [
 pub const FREEROLLING_LOAD_N: f64 = 6000.0;
 /// BrkDrv comparison load [N] (see the module doc).
 pub const BRKDRV_LOAD_N: f64 = 5000.0;
+/// Threshold of the graded BrkDrv variable-rate sweep [-]: 10 %, because Table 3.6.2-I's
+/// "optimal variable rate" figures are those of `BrkDrv_sw14` (LR10/HR60/TH10): "BrkDrv_sw14 has
+/// a slightly different threshold to the optimal setup" (§3.6.2), and its 73.1 °C peak is the
+/// one quoted for sw14 ("60 %/s (BrkDrv_sw14) peaked at 73.1 °C"). The 2 % optimum of Table
+/// 3.6.2-E ([`BRKDRV_OPTIMUM_THRESHOLD`]) is run and printed beside it, ungraded: it is a
+/// shorter sweep the thesis never timed.
+pub const BRKDRV_VARIABLE_THRESHOLD: f64 = 0.10;
+/// The GS2MF BrkDrv optimum threshold (Table 3.6.2-E) [-].
+pub const BRKDRV_OPTIMUM_THRESHOLD: f64 = 0.02;
+
+/// The GS2MF BrkDrv optimum variable-rate sweep (10/60 %/s, 2 %), printed but not graded.
+pub fn brkdrv_optimum_setup() -> SweepSetup {
+    let mut s = brkdrv_setup(SweepKind::Variable);
+    s.name = "BrkDrv_variable_optimum_th2".into();
+    s.path = SlipPath::variable(0.30, 0.10, 0.60, BRKDRV_OPTIMUM_THRESHOLD).with_reference_hold(BRKDRV_REFERENCE_HOLD_S);
+    s
+}
+
 /// Free-rolling reference before each BrkDrv sweep [s]: the thesis's constant-rate BrkDrv
 /// sweeps last 0.4 s longer than their ±30 % paths (10 %/s: 28.6 − 16.2 = 12.4 s for 12 s;
 /// 40 %/s: 12.23 − 8.8 = 3.43 s for 3 s).
@@ -440,7 +458,7 @@ pub fn brkdrv_setup(kind: SweepKind) -> SweepSetup {
     let path = match kind {
         SweepKind::ConstantLow => SlipPath::constant(0.30, 0.10),
         SweepKind::ConstantHigh => SlipPath::constant(0.30, 0.40),
-        SweepKind::Variable => SlipPath::variable(0.30, 0.10, 0.60, 0.02),
+        SweepKind::Variable => SlipPath::variable(0.30, 0.10, 0.60, BRKDRV_VARIABLE_THRESHOLD),
     }
     .with_reference_hold(BRKDRV_REFERENCE_HOLD_S);
     SweepSetup {
@@ -557,6 +575,9 @@ pub struct CalibrationReport {
     pub freerolling: Vec<Row>,
     /// BrkDrv rows.
     pub brkdrv: Vec<Row>,
+    /// The BrkDrv 2 % optimum variable-rate sweep (Table 3.6.2-E), beside the thesis's variable
+    /// figures but not graded (see [`BRKDRV_VARIABLE_THRESHOLD`]).
+    pub brkdrv_optimum: Row,
     /// Warm-up check.
     pub warmup: WarmupCheck,
     /// Wear check.
@@ -903,6 +924,10 @@ pub fn run_calibration(cfg: &RigConfig, params: &TyreParams) -> Result<Calibrati
         brkdrv.push(row(kind, &o, THESIS_BRKDRV[i]));
         outcomes.push((s.name.clone(), s.axis, o));
     }
+    let s = brkdrv_optimum_setup();
+    let o = comparison_sweep(&pre, &s)?;
+    let brkdrv_optimum = row(SweepKind::Variable, &o, THESIS_BRKDRV[2]);
+    outcomes.push((s.name.clone(), s.axis, o));
     let mut failures = Vec::new();
     check_table("FreeRolling", &freerolling, &mut failures);
     check_table("BrkDrv", &brkdrv, &mut failures);
@@ -925,7 +950,7 @@ pub fn run_calibration(cfg: &RigConfig, params: &TyreParams) -> Result<Calibrati
     if !wear.pass {
         failures.push(format!("wear: {:.2} mm over the representative procedure, want 1–3 mm", wear.tread_loss_mm));
     }
-    Ok(CalibrationReport { freerolling, brkdrv, warmup, wear, investigation_wear, failures, outcomes })
+    Ok(CalibrationReport { freerolling, brkdrv, brkdrv_optimum, warmup, wear, investigation_wear, failures, outcomes })
 }
 
 /// The report as a table for people.
@@ -933,7 +958,8 @@ pub fn format_report(r: &CalibrationReport) -> String {
     use std::fmt::Write;
     let mut s = String::new();
     for (name, table, rows) in [("FreeRolling", "3.6.2-H", &r.freerolling), ("BrkDrv", "3.6.2-I", &r.brkdrv)] {
-        let _ = writeln!(s, "{name} (thesis Table {table}): virtual rig | thesis");
+        let var = if name == "BrkDrv" { "variable = 10/60 %/s, 10 % (sw14)" } else { "variable = 2/30 °/s, 4°" };
+        let _ = writeln!(s, "{name} (thesis Table {table}; {var}): virtual rig | thesis");
         let _ = writeln!(
             s,
             "  {:<14} {:>16} {:>18} {:>20} {:>9} {:>11}",
@@ -956,6 +982,12 @@ pub fn format_report(r: &CalibrationReport) -> String {
             );
         }
     }
+    let o = &r.brkdrv_optimum;
+    let _ = writeln!(
+        s,
+        "  {:<14} {:>7.0} | {:>6} {:>8.1} | {:>7} {:>9.2} | {:>8} {:>9.2} {:>11.1}  (2 % optimum of Table 3.6.2-E, ungraded: the thesis's row is sw14, 10 % threshold)",
+        "variable_th2", o.hysteresis_n, "", o.peak_temp_c, "", o.sweep_plus_cool_s, "", o.sweep_s, o.sliding_energy_kj
+    );
     let w = &r.warmup;
     let _ = writeln!(
         s,

@@ -448,22 +448,22 @@ pub struct ThermalParams {
 impl Default for ThermalParams {
     fn default() -> Self {
         Self {
-            surface_heat_capacity_j_per_k: 5660.0,
-            bulk_heat_capacity_j_per_k: 11140.0,
-            surface_bulk_conductance_w_per_k: 44.38,
-            convection_w_per_k: 9.369,
-            convection_speed_w_per_k: 1.11,
-            belt_contact_w_per_k: 63.42,
-            bulk_to_air_w_per_k: 40.87,
-            surface_fraction_lateral: 0.5146,
-            surface_fraction_longitudinal: 0.1843,
-            bulk_fraction_lateral: 0.312,
-            bulk_fraction_longitudinal: 0.2705,
-            rolling_loss_coefficient: 0.02618,
-            flash_lateral_k_per_kw: 0.9606,
-            flash_longitudinal_k_per_kw: 1.626,
-            flash_time_constant_s: 0.762,
-            flash_longitudinal_time_constant_s: 0.5472,
+            surface_heat_capacity_j_per_k: 6000.0,
+            bulk_heat_capacity_j_per_k: 11760.0,
+            surface_bulk_conductance_w_per_k: 43.73,
+            convection_w_per_k: 8.632,
+            convection_speed_w_per_k: 1.223,
+            belt_contact_w_per_k: 64.22,
+            bulk_to_air_w_per_k: 41.0,
+            surface_fraction_lateral: 0.5263,
+            surface_fraction_longitudinal: 0.21,
+            bulk_fraction_lateral: 0.3088,
+            bulk_fraction_longitudinal: 0.16,
+            rolling_loss_coefficient: 0.02543,
+            flash_lateral_k_per_kw: 0.9575,
+            flash_longitudinal_k_per_kw: 1.644,
+            flash_time_constant_s: 0.7736,
+            flash_longitudinal_time_constant_s: 0.6161,
             camber_zone_share_per_deg: 0.05,
         }
     }
@@ -490,7 +490,7 @@ impl Default for ThermalGripParams {
     fn default() -> Self {
         Self {
             optimum_temp_c: 50.0,
-            grip_loss_per_k2: 4.0e-5,
+            grip_loss_per_k2: 8.0e-5,
             min_grip_factor: 0.7,
             stiffness_per_k: 0.002,
             surface_weight: 0.7,
@@ -721,7 +721,7 @@ fn default_publish_rate() -> u32 {
     100
 }
 fn default_model_rate() -> u32 {
-    200
+    100
 }
 
 /// The default virtual tyre, relative to `launch-config/`.

@@ -250,6 +250,9 @@ pub struct VirtualRig {
 
     alpha_relaxed_deg: f64,
     kappa_relaxed: f64,
+    /// (Fz/Fz0)^load_exponent of the relaxation lengths, refreshed at the model rate (a powf per
+    /// internal step would cost more than the rest of the step).
+    sigma_load_scale: f64,
     kappa_tread: f64,
     control_wander: f64,
     rim_slip_steps: u64,
@@ -319,6 +322,7 @@ impl VirtualRig {
             commanded_slip_ratio_rate: 0.0,
             alpha_relaxed_deg: 0.0,
             kappa_relaxed: 0.0,
+            sigma_load_scale: 1.0,
             kappa_tread: 0.0,
             control_wander: 0.0,
             rim_slip_steps: 0,
@@ -613,7 +617,7 @@ impl VirtualRig {
         if self.effects.transient {
             let ds = rolling_speed * dt;
             let tr = &self.cfg.transient;
-            let load_scale = (self.fz_n.max(0.0) / self.fz0_n).powf(tr.load_exponent).clamp(0.2, 2.0);
+            let load_scale = self.sigma_load_scale;
             let ry = self.alpha_relaxed_deg / tr.sigma_y_half_slip_deg;
             let sigma_y = tr.sigma_y_min_m + (tr.sigma_y0_m * load_scale - tr.sigma_y_min_m).max(0.0) / (1.0 + ry * ry);
             self.alpha_relaxed_deg += (self.slip_angle.pos - self.alpha_relaxed_deg) * ds / (sigma_y + ds);
@@ -667,6 +671,8 @@ impl VirtualRig {
         s.lcx *= shape;
         s.lcy *= shape;
 
+        self.sigma_load_scale =
+            (self.fz_n.max(0.0) / self.fz0_n).powf(self.cfg.transient.load_exponent).clamp(0.2, 2.0);
         let kappa = self.tyre_kappa();
         let re_prev = if self.model.valid && self.model.mf.re_m > 0.0 {
             self.model.mf.re_m

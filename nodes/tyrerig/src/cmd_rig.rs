@@ -57,6 +57,7 @@ fn calibrate(config: &Path, effects: Option<&str>, json: Option<&Path>, plots: O
         let value = serde_json::json!({
             "freerolling": report.freerolling,
             "brkdrv": report.brkdrv,
+            "brkdrv_optimum_th2_ungraded": report.brkdrv_optimum,
             "warmup": report.warmup,
             "wear": report.wear,
             "investigation_wear": report.investigation_wear,
