@@ -11,6 +11,7 @@ use crate::{
     summary::{RunSummary, SummaryBuilder},
 };
 use mcaplog::LogWriteError;
+use monitor::{MonitorConfig, TyreInfo, pipeline::Pipeline};
 use procedure::Plan;
 use rigsim::{RigConfig, TyreParams, VirtualRig};
 use sequencer::{Sequencer, SequencerConfig, SequencerEvent};
@@ -53,6 +54,11 @@ pub struct Headless {
     seq_offset: u64,
     max_rig_time_s: f64,
     wear_true: Vec<f64>,
+    /// Live channels and the online quality monitor (one per tyre specimen).
+    pipeline: Pipeline,
+    tyre_info: TyreInfo,
+    wear_measured: Vec<f64>,
+    last_wear_mm: f64,
 }
 
 impl std::fmt::Debug for Headless {
@@ -71,11 +77,24 @@ pub fn rig_config(spec: &RunSpec) -> Result<(RigConfig, TyreParams), HeadlessErr
         cfg.effects = rigsim::Effects::parse(e).map_err(|e| HeadlessError::Effects(e.to_string()))?;
     }
     if let Some(m) = spec.wear_multiplier {
-        cfg.wear.wear_mm_per_mj *= m;
+        cfg.tyre.wear_rate_multiplier *= m;
     }
+    // The rig's load envelope follows the rating the operator entered, as on a real rig: a wrong
+    // entry loads the tyre too hard, and the monitor has to catch it from the data.
+    cfg.tyre.load_index = spec.inputs.load_index;
     let params = TyreParams::read_tir(&cfg.tyre_file)
         .map_err(|e| HeadlessError::Tyre { path: cfg.tyre_file.display().to_string(), detail: e.to_string() })?;
     Ok((cfg, params))
+}
+
+/// The ETRTO load index a tyre declares, from its nominal load: the index whose
+/// Fz0 = 0.65 × capacity × 9.81 is nearest FNOMIN (the thesis's tyre: 6,752 N → 110).
+pub fn declared_load_index(params: &TyreParams) -> u32 {
+    let fnomin = params.fnomin_n();
+    (60..=130)
+        .filter_map(|li| procedure::fz0_n(li).ok().map(|fz0| (li, (fz0 - fnomin).abs())))
+        .min_by(|a, b| a.1.total_cmp(&b.1))
+        .map_or(110, |(li, _)| li)
 }
 
 /// Loads and expands the procedure of `spec`.
@@ -93,6 +112,12 @@ impl Headless {
             .map_err(|e| HeadlessError::RigConfig(e.to_string()))?;
         let gate = ThermalGate::new(thermal_cfg).map_err(|e| HeadlessError::Thermal(e.to_string()))?;
         let seq = Sequencer::new(plan, seq_cfg).map_err(|e| HeadlessError::Sequencer(e.to_string()))?;
+        // The monitor judges the data against the tyre's own (sidewall) rating, which the
+        // operator's entry may contradict: it is not told the entry, it has to see it in the loads.
+        let tyre_info = TyreInfo::from_load_index(declared_load_index(&params))
+            .map_err(|e| HeadlessError::Procedure(format!("load index: {e}")))?;
+        let pipeline = Pipeline::new(channels::ChannelsConfig::default(), MonitorConfig::default(), tyre_info.clone())
+            .map_err(|e| HeadlessError::Procedure(format!("monitor: {e}")))?;
         Ok(Self {
             rig,
             rig_cfg,
@@ -104,6 +129,10 @@ impl Headless {
             seq_offset: 0,
             max_rig_time_s: spec.max_rig_time_s,
             wear_true: Vec::new(),
+            pipeline,
+            tyre_info,
+            wear_measured: Vec::new(),
+            last_wear_mm: 0.0,
         })
     }
 
@@ -159,11 +188,46 @@ impl Headless {
     /// Mounts a new specimen: a fresh tyre (new tread, not broken in, at room temperature).
     fn mount_new_tyre(&mut self, last_seq: u64) -> Result<(), HeadlessError> {
         self.wear_true.push(self.rig.truth().tread_worn_mm);
+        self.wear_measured.push(self.last_wear_mm);
+        self.last_wear_mm = 0.0;
+        // A new specimen starts the monitor's wear and drift tracking afresh.
+        self.pipeline =
+            Pipeline::new(channels::ChannelsConfig::default(), MonitorConfig::default(), self.tyre_info.clone())
+                .map_err(|e| HeadlessError::Procedure(format!("monitor: {e}")))?;
         self.time_offset_s += self.rig.time_s();
         self.seq_offset = last_seq + 1;
         let seed = self.seed.wrapping_add(self.wear_true.len() as u64);
         self.rig = VirtualRig::new(self.rig_cfg.clone(), self.params.clone(), seed)
             .map_err(|e| HeadlessError::RigConfig(e.to_string()))?;
+        Ok(())
+    }
+
+    /// Publishes what the channels/monitor pipeline produced and keeps its alarms and wear.
+    fn pipeline_out(
+        &mut self,
+        t: f64,
+        p: &monitor::pipeline::PipelineOutput,
+        sink: &mut dyn MessageSink,
+        sum: &mut SummaryBuilder,
+    ) -> Result<(), HeadlessError> {
+        if p.live.header.stamp.as_nanos() > 0 {
+            sink.put(t, Outgoing::Live(&p.live))?;
+        }
+        for ss in &p.sweep_summaries {
+            sink.put(t, Outgoing::SweepSummary(ss))?;
+        }
+        if let Some(r) = &p.report {
+            if r.wear_mm.is_finite() {
+                self.last_wear_mm = r.wear_mm;
+            }
+            sink.put(t, Outgoing::Quality(r))?;
+        }
+        if let Some(d) = &p.diagnostics {
+            sink.put(t, Outgoing::Diagnostics(d))?;
+        }
+        for a in &p.alarms {
+            sum.alarm(&a.level, &a.check, a.message.clone(), a.rig_time_s);
+        }
         Ok(())
     }
 
@@ -190,6 +254,7 @@ impl Headless {
             let _ = self.rig.apply_setpoint(sp);
         }
         let mut last_seq = 0;
+        let mut refusing = false;
         let mut in_sweep = false;
         loop {
             let Some(local) = self.rig.step() else { continue };
@@ -213,9 +278,13 @@ impl Headless {
                 sum.alarm(level, a.check.as_str(), a.message.clone(), a.rig_time_s);
             }
 
+            let p = self.pipeline.on_sample(&sample);
+            self.pipeline_out(t, &p, sink, &mut sum)?;
+
             let out = self.seq.step(t, Some(&th.state), Some(&sample));
             if let Some(st) = &out.state {
                 self.gate.on_procedure_state(t, st);
+                self.pipeline.on_procedure_state(st);
                 sum.on_state(st);
                 progress(st.progress, t);
                 sink.put(t, Outgoing::Procedure(st))?;
@@ -252,8 +321,14 @@ impl Headless {
             }
             if let Some(sp) = &out.setpoint {
                 sink.put(t, Outgoing::Setpoint(sp))?;
-                if let Err(refusal) = self.rig.apply_setpoint(sp) {
-                    sum.alarm("ERROR", "envelope", format!("virtual rig refused a setpoint: {refusal}"), t);
+                match self.rig.apply_setpoint(sp) {
+                    // One alarm per refusal episode, not one per control tick.
+                    Err(refusal) if !refusing => {
+                        refusing = true;
+                        sum.alarm("ERROR", "envelope", format!("virtual rig refused a setpoint: {refusal}"), t);
+                    }
+                    Err(_) => {}
+                    Ok(()) => refusing = false,
                 }
             }
             if done {
@@ -267,9 +342,14 @@ impl Headless {
                 });
             }
         }
+        let p = self.pipeline.finish();
+        let t_end = self.time_offset_s + self.rig.time_s();
+        self.pipeline_out(t_end, &p, sink, &mut sum)?;
         if first_tyre_mounted || self.wear_true.is_empty() {
             self.wear_true.push(self.rig.truth().tread_worn_mm);
+            self.wear_measured.push(self.last_wear_mm);
         }
+        sum.summary.wear_mm_measured = self.wear_measured.clone();
         sum.summary.tyres_used = if sum.summary.tyre_changes > 0 { sum.summary.tyre_changes } else { 1 };
         sum.summary.wear_mm_true = self.wear_true.clone();
         Ok(sum.summary)

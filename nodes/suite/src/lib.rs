@@ -13,6 +13,6 @@ pub mod spec;
 pub mod summary;
 
 pub use headless::{Headless, HeadlessError};
-pub use sink::{McapSink, MessageSink, NullSink};
+pub use sink::{McapSink, MessageSink, NullSink, Outgoing};
 pub use spec::{ProcedureChoice, RunSpec};
 pub use summary::{Alarm, ProcedureTimes, RunSummary, summary_from_log};

@@ -52,6 +52,8 @@ pub struct RunSummary {
     pub completed: bool,
     /// Simulator truth: tread worn per specimen [mm] (virtual rig only).
     pub wear_mm_true: Vec<f64>,
+    /// Tread worn as the online monitor measured it from DSTWOWHC, per specimen [mm].
+    pub wear_mm_measured: Vec<f64>,
     /// Data steps in the whole run.
     pub sweeps: u32,
     /// Thermal time-outs in the whole run.

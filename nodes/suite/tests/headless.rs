@@ -70,3 +70,52 @@ fn summary_from_the_log_matches_the_live_summary() {
         live.total_rig_time_s
     );
 }
+
+/// Records when the first section whose name starts with `prefix` ends.
+struct SectionEnd {
+    prefix: &'static str,
+    inside: bool,
+    ended_at: Option<f64>,
+}
+
+impl suite::MessageSink for SectionEnd {
+    fn put(&mut self, t_s: f64, msg: suite::sink::Outgoing<'_>) -> Result<(), mcaplog::LogWriteError> {
+        if let suite::sink::Outgoing::Procedure(st) = msg {
+            let here = st.section.starts_with(self.prefix);
+            if self.inside && !here && self.ended_at.is_none() {
+                self.ended_at = Some(t_s);
+            }
+            self.inside = here;
+        }
+        Ok(())
+    }
+}
+
+/// The online monitor runs inside `tyrerig run`: a normal FreeRolling run raises no ERROR and
+/// measures the wear within ±0.3 mm of the simulator's truth; the same run with load index 125
+/// typed in for this load-index-110 tyre raises a `load_rating` ERROR before the first force &
+/// moment section ends.
+#[test]
+fn monitor_catches_a_wrong_load_rating_early_and_measures_wear() {
+    let (ok, _) = run(ProcedureChoice::FreeRolling, |_| {});
+    let errors: Vec<_> = ok.alarms.iter().filter(|a| a.level == "ERROR").collect();
+    assert!(errors.is_empty(), "normal run: {errors:?}");
+    let (measured, truth) = (ok.wear_mm_measured[0], ok.wear_mm_true[0]);
+    println!("wear measured {measured:.3} mm, true {truth:.3} mm");
+    assert!((measured - truth).abs() <= 0.3, "measured {measured} vs true {truth}");
+
+    let mut spec = RunSpec::new(&launch_config(), ProcedureChoice::FreeRolling);
+    spec.inputs.load_index = 125;
+    let mut h = Headless::new(&spec, thermal::ThermalConfig::default(), sequencer::SequencerConfig::default())
+        .expect("headless");
+    let mut sink = SectionEnd { prefix: "force_moment", inside: false, ended_at: None };
+    let summary = h.run(&mut sink, &mut |_, _| {}).expect("run");
+    let fm_end = sink.ended_at.expect("the force & moment section ran");
+    let first =
+        summary.alarms.iter().find(|a| a.level == "ERROR" && a.check == "load_rating").expect("a load_rating ERROR");
+    println!(
+        "load_rating ERROR at {:.0} s (first force & moment section ends at {fm_end:.0} s): {}",
+        first.rig_time_s, first.message
+    );
+    assert!(first.rig_time_s < fm_end, "load_rating ERROR at {:.0} s, after {fm_end:.0} s", first.rig_time_s);
+}

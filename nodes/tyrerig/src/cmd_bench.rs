@@ -128,7 +128,7 @@ pub fn run(cmd: BenchCmd) -> anyhow::Result<()> {
                         tokio::time::sleep(Duration::from_millis(1)).await;
                     }
                     seq += 1;
-                    if seq % 256 == 0 {
+                    if seq.is_multiple_of(256) {
                         tokio::task::yield_now().await;
                     }
                 }

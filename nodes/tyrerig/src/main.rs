@@ -8,10 +8,14 @@ use clap::{Parser, Subcommand};
 
 // --- subcommand modules (one per capability) ---
 mod cmd_bench;
+mod cmd_data;
+mod cmd_doctor;
+mod cmd_fit;
 mod cmd_launch;
 mod cmd_mcap;
 mod cmd_model;
 mod cmd_replay;
+mod cmd_report;
 mod cmd_rig;
 mod cmd_run;
 mod launch;
@@ -29,6 +33,18 @@ enum Command {
     /// Speed figures through real DDS (latency, recorder throughput)
     #[command(subcommand)]
     Bench(cmd_bench::BenchCmd),
+    /// End-of-run report: replay a log through the channels and monitor, write Markdown and plots
+    Report(Box<cmd_report::ReportArgs>),
+    /// Find where model and logs disagree, name the missing effect, add it, show the gap shrink
+    Doctor(Box<cmd_doctor::DoctorArgs>),
+    /// Fit an MF-Tyre 6.1 model (.tir) to GS2MF logs, staged as in the thesis
+    Fit(Box<cmd_fit::FitArgs>),
+    /// Export log data (TYDEX)
+    #[command(subcommand)]
+    Export(cmd_data::ExportCmd),
+    /// Import legacy rig data (Calspan TTC-style, TYDEX) into an MCAP log the fitter reads
+    #[command(subcommand)]
+    Import(cmd_data::ImportCmd),
     /// Run a procedure on the virtual rig, log it to MCAP and print the rig-time summary
     Run(Box<cmd_run::RunArgs>),
     /// Virtual rig: calibration against the thesis
@@ -54,6 +70,11 @@ fn main() -> anyhow::Result<()> {
     match cli.command {
         // --- subcommand dispatch ---
         Command::Bench(cmd) => cmd_bench::run(cmd),
+        Command::Report(args) => cmd_report::run(*args),
+        Command::Doctor(args) => cmd_doctor::run(*args),
+        Command::Fit(args) => cmd_fit::run(*args),
+        Command::Export(cmd) => cmd_data::run_export(cmd),
+        Command::Import(cmd) => cmd_data::run_import(cmd),
         Command::Run(args) => cmd_run::run(*args),
         Command::Rig(cmd) => cmd_rig::run(cmd),
         Command::Model(cmd) => cmd_model::run(cmd),
