@@ -288,6 +288,8 @@ pub fn relaxation_length(disp_m: &[f64], fy_n: &[f64], saturated_frac: f64) -> O
 
 /// A static drag's linear part must span at least this displacement [m].
 const MIN_DRAG_DISPLACEMENT_M: f64 = 0.002;
+/// …move one way: net displacement at least this fraction of the path…
+const MIN_DRAG_MONOTONY: f64 = 0.8;
 /// …and be a line: coefficient of determination at least this.
 const MIN_DRAG_R2: f64 = 0.9;
 
@@ -309,6 +311,12 @@ pub fn longitudinal_stiffness(disp_m: &[f64], fx_n: &[f64], linear_frac: f64) ->
     // wheel locked) gives a cloud, not a line: refuse it rather than report noise.
     let span = xs.iter().copied().fold(f64::NEG_INFINITY, f64::max) - xs.iter().copied().fold(f64::INFINITY, f64::min);
     if span.is_nan() || span < MIN_DRAG_DISPLACEMENT_M {
+        return None;
+    }
+    // The belt moves one way: a displacement that wanders (integrated noise) is not a drag.
+    let path: f64 = xs.windows(2).map(|w| (w[1] - w[0]).abs()).sum();
+    let net = (xs[xs.len() - 1] - xs[0]).abs();
+    if path <= 0.0 || net < MIN_DRAG_MONOTONY * path {
         return None;
     }
     let l = fit_line(&xs, &ys)?;

@@ -307,6 +307,8 @@ struct Series {
 
 #[derive(Debug, Clone)]
 struct Panel {
+    /// Where the legend sits (where the curves leave room).
+    legend: SeriesLabelPosition,
     title: String,
     x_label: String,
     y_label: String,
@@ -377,7 +379,7 @@ fn draw_panel<DB: DrawingBackend>(area: &DrawingArea<DB, Shift>, p: &Panel) -> R
     }
     if p.series.iter().any(|s| !s.label.is_empty()) {
         ctx.configure_series_labels()
-            .position(SeriesLabelPosition::UpperRight)
+            .position(p.legend.clone())
             .background_style(WHITE.mix(0.85))
             .border_style(BLACK.mix(0.4))
             .label_font(("sans-serif", 13))
@@ -473,12 +475,15 @@ pub fn write_report(r: &Replay, log_name: &str, out_dir: &Path, format: Format) 
             }
             let title = format!("graph sweep #{}", ord + 1);
             force_panels.push(Panel {
+                // FX rises to the upper right; FYW (ISO-W) falls to the lower right.
+                legend: if long { SeriesLabelPosition::LowerRight } else { SeriesLabelPosition::UpperRight },
                 title: title.clone(),
                 x_label: if long { "LONGSLIP [-]" } else { "SLIPANGL [deg]" }.into(),
                 y_label: if long { "FX [N]" } else { "FYW [N]" }.into(),
                 series: fs,
             });
             radius_panels.push(Panel {
+                legend: SeriesLabelPosition::UpperRight,
                 title,
                 x_label: "zeroed RUNTIME [s]".into(),
                 y_label: "DSTWOWHC [m]".into(),
@@ -502,6 +507,7 @@ pub fn write_report(r: &Replay, log_name: &str, out_dir: &Path, format: Format) 
     if !r.temp_trace.is_empty() {
         let (t0, t1) = (r.temp_trace[0].0, r.temp_trace[r.temp_trace.len() - 1].0);
         let p = Panel {
+            legend: SeriesLabelPosition::UpperRight,
             title: "TRDTEMPC vs runtime".into(),
             x_label: "RUNTIME [s]".into(),
             y_label: "TRDTEMPC [°C]".into(),
@@ -525,6 +531,7 @@ pub fn write_report(r: &Replay, log_name: &str, out_dir: &Path, format: Format) 
         let law: Vec<(f64, f64)> =
             (1..=100).map(|i| emax * f64::from(i) / 100.0).map(|e| (e, thesis_peak_temp_c(e))).collect();
         let p = Panel {
+            legend: SeriesLabelPosition::LowerRight,
             title: "Peak TRDTEMPC vs sliding energy per sweep".into(),
             x_label: "sliding energy [kJ]".into(),
             y_label: "peak TRDTEMPC [°C]".into(),
@@ -544,6 +551,7 @@ pub fn write_report(r: &Replay, log_name: &str, out_dir: &Path, format: Format) 
         let usable = r.tyre.as_ref().map_or(4.0, TyreInfo::usable_mm);
         let (t0, t1) = (r.wear_trace[0].0, r.wear_trace[r.wear_trace.len() - 1].0);
         let p = Panel {
+            legend: SeriesLabelPosition::UpperLeft,
             title: "Tread wear from DSTWOWHC (monitor)".into(),
             x_label: "RUNTIME [s]".into(),
             y_label: "wear [mm]".into(),
