@@ -420,7 +420,8 @@ pub const BRKDRV_OPTIMUM_THRESHOLD: f64 = 0.02;
 pub fn brkdrv_optimum_setup() -> SweepSetup {
     let mut s = brkdrv_setup(SweepKind::Variable);
     s.name = "BrkDrv_variable_optimum_th2".into();
-    s.path = SlipPath::variable(0.30, 0.10, 0.60, BRKDRV_OPTIMUM_THRESHOLD).with_reference_hold(BRKDRV_REFERENCE_HOLD_S);
+    s.path =
+        SlipPath::variable(0.30, 0.10, 0.60, BRKDRV_OPTIMUM_THRESHOLD).with_reference_hold(BRKDRV_REFERENCE_HOLD_S);
     s
 }
 
