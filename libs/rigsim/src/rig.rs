@@ -279,7 +279,9 @@ impl VirtualRig {
         let r0 = params.unloaded_radius_m();
         let p0 = params.nominal_pressure_pa();
         if !(fz0_n.is_finite() && fz0_n > 0.0 && r0.is_finite() && r0 > 0.0 && p0.is_finite() && p0 > 0.0) {
-            return Err(RigError::TyreValues(format!("FNOMIN {fz0_n}, UNLOADED_RADIUS {r0}, NOMPRES {p0} must be > 0")));
+            return Err(RigError::TyreValues(format!(
+                "FNOMIN {fz0_n}, UNLOADED_RADIUS {r0}, NOMPRES {p0} must be > 0"
+            )));
         }
         let limits = cfg.limits();
         // The rating entered at the rig caps the load, not the tyre file's FNOMIN: a wrong index
