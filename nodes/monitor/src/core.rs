@@ -698,7 +698,11 @@ impl MonitorCore {
         let level = [
             c.drift_rms_pct.level(d.rms_pct),
             c.drift_peak_pct.level(d.peak_pct.abs()),
-            c.drift_peak_shift.level(d.peak_shift),
+            if d.longitudinal {
+                c.drift_peak_shift_pct_sr.level(d.peak_shift)
+            } else {
+                c.drift_peak_shift.level(d.peak_shift)
+            },
             c.drift_stiffness_pct.level(d.stiffness_pct.abs()),
             c.drift_temp_pct.level(d.temp_pct),
         ]
