@@ -29,6 +29,8 @@ pub struct DoctorConfig {
     pub fit: FitOptions,
     /// Worker threads scoring candidates.
     pub threads: usize,
+    /// Smallest cut of the held-out RMS in a candidate's own region for it to be named.
+    pub min_region_cut: f64,
 }
 
 impl Default for DoctorConfig {
@@ -42,6 +44,7 @@ impl Default for DoctorConfig {
             region_sigma: 2.0,
             fit: FitOptions::default(),
             threads: std::thread::available_parallelism().map_or(1, |n| n.get()).min(4),
+            min_region_cut: 0.1,
         }
     }
 }
@@ -293,14 +296,93 @@ pub fn diagnose(ds: &Dataset, base: &TyreParams, cfg: &DoctorConfig) -> Result<D
                 }
             }
         });
-        let (scores, mut cv_preds): (Vec<CandidateScore>, Vec<_>) = results.into_iter().flatten().unzip();
+        let (mut scores, cv_preds): (Vec<CandidateScore>, Vec<_>) = results.into_iter().flatten().unzip();
         let mut order: Vec<usize> = (0..scores.len()).filter(|&i| scores[i].testable).collect();
         order.sort_by(|&a, &b| scores[b].evidence.total_cmp(&scores[a].evidence));
-        let best = order.first().copied();
-        let runner_up = order.get(1).map(|&i| (scores[i].effect, scores[i].evidence));
+        // Take the significant candidates in order of evidence; the first whose fit also cuts
+        // the held-out residual in its own region is named. An effect that helps χ² overall
+        // while its region gets worse is not the effect in the data.
+        let mut accepted = None;
+        for (pos, &bi) in order.iter().enumerate() {
+            if !scores[bi].significant {
+                break;
+            }
+            let Some((specs, pred_ho)) = cv_preds[bi].clone() else { continue };
+            let score = scores[bi].clone();
+            let (fitted, _) = fit_effects(&ev, &specs, &all, &meas, sigma, cfg.fit);
+            let pred_fit = ev.predict(&fitted, &all);
+            let ch = (0..4)
+                .max_by(|&a, &b| score.delta_chi2_by_channel[a].total_cmp(&score.delta_chi2_by_channel[b]))
+                .unwrap_or(CH_FY);
+            // Region: where the new effect moves the prediction of the main channel beyond noise.
+            let mut thr = cfg.region_sigma;
+            let mut region: Vec<usize>;
+            loop {
+                region = all
+                    .iter()
+                    .copied()
+                    .filter(|&k| {
+                        ((pred_fit[k][ch] - cur_fit[k][ch]) / sigma[ch]).abs() > thr && meas[k][ch].is_finite()
+                    })
+                    .collect();
+                if region.len() >= 20 || thr <= 0.5 {
+                    break;
+                }
+                thr /= 2.0;
+            }
+            let before_ho = rms_of(&meas, &cur_ho, ch, &region);
+            let after_ho = rms_of(&meas, &pred_ho, ch, &region);
+            if after_ho > (1.0 - cfg.min_region_cut) * before_ho {
+                scores[bi].significant = false;
+                scores[bi].reason = format!(
+                    "rejected: held-out {} RMS in its own region {:.4} → {:.4} (needs ≥ {:.0} % less)",
+                    CHANNELS[ch],
+                    before_ho,
+                    after_ho,
+                    100.0 * cfg.min_region_cut
+                );
+                continue;
+            }
+            let runner_up =
+                order.iter().enumerate().find(|(p, _)| *p != pos).map(|(_, &i)| (scores[i].effect, scores[i].evidence));
+            let corr = correlation(
+                all.iter().map(|&k| meas[k][ch] - cur_fit[k][ch]),
+                all.iter().map(|&k| pred_fit[k][ch] - cur_fit[k][ch]),
+            );
+            let eff_params = fitted.iter().find(|e| e.effect == score.effect).cloned().unwrap_or(EffectParams {
+                effect: score.effect,
+                keys: vec![],
+                values: vec![],
+                threshold_w: 0.0,
+            });
+            let ne = NamedEffect {
+                effect: score.effect,
+                evidence: score.evidence,
+                runner_up,
+                channel: CHANNELS[ch].to_owned(),
+                region: describe_region(ds, &ev, score.effect, &region, thr),
+                region_points: region.len(),
+                rms_before: rms_of(&meas, &cur_fit, ch, &region),
+                rms_after: rms_of(&meas, &pred_fit, ch, &region),
+                rms_before_heldout: before_ho,
+                rms_after_heldout: after_ho,
+                correlation: corr,
+                params: eff_params,
+            };
+            accepted = Some((ne, specs, pred_fit, pred_ho, fitted, region));
+            break;
+        }
         rounds.push(scores.clone());
-        let Some(bi) = best.filter(|&i| scores[i].significant) else {
+        let Some((ne, specs, pred_fit, pred_ho, fitted, region)) = accepted else {
+            let best = order.first().copied();
             stop_reason = match best {
+                Some(i) if !scores[i].reason.is_empty() => {
+                    format!(
+                        "no significant candidate left: the best, {}, was {}",
+                        scores[i].effect.name(),
+                        scores[i].reason
+                    )
+                }
                 Some(i) => format!(
                     "no significant candidate left: the best, {}, explains {:.1} % of the held-out χ² (needs {:.1} %) and improves {}/{} folds",
                     scores[i].effect.name(),
@@ -313,51 +395,7 @@ pub fn diagnose(ds: &Dataset, base: &TyreParams, cfg: &DoctorConfig) -> Result<D
             };
             break;
         };
-        let Some((specs, pred_ho)) = cv_preds[bi].take() else { break };
-        let score = &scores[bi];
-        let (fitted, _) = fit_effects(&ev, &specs, &all, &meas, sigma, cfg.fit);
-        let pred_fit = ev.predict(&fitted, &all);
-        let ch = (0..4)
-            .max_by(|&a, &b| score.delta_chi2_by_channel[a].total_cmp(&score.delta_chi2_by_channel[b]))
-            .unwrap_or(CH_FY);
-        // Region: where the new effect moves the prediction of the main channel beyond noise.
-        let mut thr = cfg.region_sigma;
-        let mut region: Vec<usize>;
-        loop {
-            region = all
-                .iter()
-                .copied()
-                .filter(|&k| ((pred_fit[k][ch] - cur_fit[k][ch]) / sigma[ch]).abs() > thr && meas[k][ch].is_finite())
-                .collect();
-            if region.len() >= 20 || thr <= 0.5 {
-                break;
-            }
-            thr /= 2.0;
-        }
-        let corr = correlation(
-            all.iter().map(|&k| meas[k][ch] - cur_fit[k][ch]),
-            all.iter().map(|&k| pred_fit[k][ch] - cur_fit[k][ch]),
-        );
-        let eff_params = fitted.iter().find(|e| e.effect == score.effect).cloned().unwrap_or(EffectParams {
-            effect: score.effect,
-            keys: vec![],
-            values: vec![],
-            threshold_w: 0.0,
-        });
-        named.push(NamedEffect {
-            effect: score.effect,
-            evidence: score.evidence,
-            runner_up,
-            channel: CHANNELS[ch].to_owned(),
-            region: describe_region(ds, &ev, score.effect, &region, thr),
-            region_points: region.len(),
-            rms_before: rms_of(&meas, &cur_fit, ch, &region),
-            rms_after: rms_of(&meas, &pred_fit, ch, &region),
-            rms_before_heldout: rms_of(&meas, &cur_ho, ch, &region),
-            rms_after_heldout: rms_of(&meas, &pred_ho, ch, &region),
-            correlation: corr,
-            params: eff_params,
-        });
+        named.push(ne);
         plot.after.push(pred_fit.clone());
         plot.after_heldout.push(pred_ho.clone());
         plot.region.push(region);

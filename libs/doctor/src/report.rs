@@ -260,6 +260,8 @@ pub fn markdown(
                 format!("not testable: {}", c.reason)
             } else if c.significant {
                 "significant".to_owned()
+            } else if !c.reason.is_empty() {
+                c.reason.clone()
             } else {
                 String::new()
             };
