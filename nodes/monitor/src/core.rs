@@ -546,6 +546,18 @@ impl MonitorCore {
             forecast_low_mm: f64::NAN,
             fit: None,
         };
+        self.chatter_worst_n = 0.0;
+        // Verdicts about the tyre start again with the new one (so its alarms are raised again);
+        // the load rating and the thermal time-outs are about the rig and the procedure and go on.
+        let t = self.last_t.max(0.0);
+        for check in ["wear", "graph_sweep_drift", "break_in", "chatter"] {
+            if let Some(c) = self.checks.iter_mut().find(|c| c.check == check) {
+                c.level = QualityCheck::OK;
+                c.message = "new specimen mounted: no data on it yet".to_owned();
+                c.value = f64::NAN;
+                c.rig_time_s = t;
+            }
+        }
     }
 
     // --- load rating ---
