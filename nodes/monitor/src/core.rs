@@ -122,6 +122,8 @@ pub struct MonitorCore {
     curve: Option<(ProcedureState, SweepCurve)>,
     graph: BTreeMap<String, GraphBlocks>,
     drifts: Vec<DriftRecord>,
+    /// First of `drifts` on the specimen on the rig.
+    drift_start: usize,
 
     // break-in
     repeats: BTreeMap<String, Vec<f64>>,
@@ -196,6 +198,7 @@ impl MonitorCore {
             curve: None,
             graph: BTreeMap::new(),
             drifts: Vec::new(),
+            drift_start: 0,
             repeats: BTreeMap::new(),
             fz_hist: [0.0; 2],
             fz_hist_n: 0,
@@ -547,6 +550,7 @@ impl MonitorCore {
             fit: None,
         };
         self.chatter_worst_n = 0.0;
+        self.drift_start = self.drifts.len();
         // Verdicts about the tyre start again with the new one (so its alarms are raised again);
         // the load rating and the thermal time-outs are about the rig and the procedure and go on.
         let t = self.last_t.max(0.0);
@@ -729,13 +733,15 @@ impl MonitorCore {
             level,
         });
         // The check shows the worst pair so far.
-        let worst = self.drifts.iter().max_by_key(|r| r.level).cloned().unwrap_or_else(|| self.drifts[0].clone());
+        let mine = &self.drifts[self.drift_start.min(self.drifts.len() - 1)..];
+        let worst = mine.iter().max_by_key(|r| r.level).cloned().unwrap_or_else(|| mine[0].clone());
+        let n_pairs = mine.len();
         let wd = worst.drift;
         let (su, slip) = if wd.longitudinal { ("% SR", "slip") } else { ("°", "cornering") };
         let msg = format!(
             "graph sweep 2 vs 1 ({} pair(s)); worst: #{} of {}: curve RMS {:.1} % of peak, peak force {:+.1} %, peak \
              position {:.2} {su}, {slip} stiffness {:+.1} %, temperature profile {:.1} %",
-            self.drifts.len(),
+            n_pairs,
             worst.ordinal + 1,
             worst.procedure,
             wd.rms_pct,
