@@ -56,9 +56,6 @@ pub struct Headless {
     wear_true: Vec<f64>,
     /// Live channels and the online quality monitor (one per tyre specimen).
     pipeline: Pipeline,
-    tyre_info: TyreInfo,
-    wear_measured: Vec<f64>,
-    last_wear_mm: f64,
 }
 
 impl std::fmt::Debug for Headless {
@@ -116,7 +113,7 @@ impl Headless {
         // operator's entry may contradict: it is not told the entry, it has to see it in the loads.
         let tyre_info = TyreInfo::from_load_index(declared_load_index(&params))
             .map_err(|e| HeadlessError::Procedure(format!("load index: {e}")))?;
-        let pipeline = Pipeline::new(channels::ChannelsConfig::default(), MonitorConfig::default(), tyre_info.clone())
+        let pipeline = Pipeline::new(channels::ChannelsConfig::default(), MonitorConfig::default(), tyre_info)
             .map_err(|e| HeadlessError::Procedure(format!("monitor: {e}")))?;
         Ok(Self {
             rig,
@@ -130,9 +127,6 @@ impl Headless {
             max_rig_time_s: spec.max_rig_time_s,
             wear_true: Vec::new(),
             pipeline,
-            tyre_info,
-            wear_measured: Vec::new(),
-            last_wear_mm: 0.0,
         })
     }
 
@@ -188,12 +182,8 @@ impl Headless {
     /// Mounts a new specimen: a fresh tyre (new tread, not broken in, at room temperature).
     fn mount_new_tyre(&mut self, last_seq: u64) -> Result<(), HeadlessError> {
         self.wear_true.push(self.rig.truth().tread_worn_mm);
-        self.wear_measured.push(self.last_wear_mm);
-        self.last_wear_mm = 0.0;
-        // A new specimen starts the monitor's wear and drift tracking afresh.
-        self.pipeline =
-            Pipeline::new(channels::ChannelsConfig::default(), MonitorConfig::default(), self.tyre_info.clone())
-                .map_err(|e| HeadlessError::Procedure(format!("monitor: {e}")))?;
+        // One channels/monitor pipeline serves the whole run: its cores see PHASE_TYRE_CHANGE
+        // and keep per-specimen wear themselves, so a replay of the log matches the live run.
         self.time_offset_s += self.rig.time_s();
         self.seq_offset = last_seq + 1;
         let seed = self.seed.wrapping_add(self.wear_true.len() as u64);
@@ -204,7 +194,7 @@ impl Headless {
 
     /// Publishes what the channels/monitor pipeline produced and keeps its alarms and wear.
     fn pipeline_out(
-        &mut self,
+        &self,
         t: f64,
         p: &monitor::pipeline::PipelineOutput,
         sink: &mut dyn MessageSink,
@@ -217,9 +207,6 @@ impl Headless {
             sink.put(t, Outgoing::SweepSummary(ss))?;
         }
         if let Some(r) = &p.report {
-            if r.wear_mm.is_finite() {
-                self.last_wear_mm = r.wear_mm;
-            }
             sink.put(t, Outgoing::Quality(r))?;
         }
         if let Some(d) = &p.diagnostics {
@@ -270,7 +257,7 @@ impl Headless {
             self.gate.on_sample(t, &sample);
             let th = self.gate.step(t);
             sink.put(t, Outgoing::Thermal(&th.state))?;
-            for a in &th.alarms {
+            for a in th.alarms.iter().filter(|a| a.check != thermal::ThermalCheck::Timeout) {
                 let level = match a.level {
                     thermal::core::AlarmLevel::Warn => "WARN",
                     thermal::core::AlarmLevel::Error => "ERROR",
@@ -347,9 +334,8 @@ impl Headless {
         self.pipeline_out(t_end, &p, sink, &mut sum)?;
         if first_tyre_mounted || self.wear_true.is_empty() {
             self.wear_true.push(self.rig.truth().tread_worn_mm);
-            self.wear_measured.push(self.last_wear_mm);
         }
-        sum.summary.wear_mm_measured = self.wear_measured.clone();
+        sum.summary.wear_mm_measured = self.pipeline.monitor.wear_by_specimen_mm();
         sum.summary.tyres_used = if sum.summary.tyre_changes > 0 { sum.summary.tyre_changes } else { 1 };
         sum.summary.wear_mm_true = self.wear_true.clone();
         Ok(sum.summary)

@@ -205,19 +205,30 @@ fn run_dds(args: &RunArgs) -> anyhow::Result<()> {
                 }
             }
         };
+        let mut failed: Option<anyhow::Error> = None;
         tokio::select! {
             _ = shutdown.wait() => {}
             phase = watch => {
                 tracing::info!(phase, "procedure ended; stopping the suite");
                 // Let the last messages reach the recorder.
                 tokio::time::sleep(std::time::Duration::from_secs(1)).await;
-                shutdown.trigger();
+            }
+            // A node that fails while the procedure runs ends the run at once (the recorder
+            // still completes its file), instead of leaving the watcher waiting forever.
+            Some(done) = tasks.join_next() => {
+                if let Ok((name, Err(e))) = done {
+                    failed = Some(e.context(format!("node {name}")));
+                }
             }
         }
+        shutdown.trigger();
         while let Some(done) = tasks.join_next().await {
             if let Ok((name, Err(e))) = done {
-                anyhow::bail!("node {name}: {e:#}");
+                failed.get_or_insert(e.context(format!("node {name}")));
             }
+        }
+        if let Some(e) = failed {
+            return Err(e);
         }
         anyhow::Ok(())
     })?;

@@ -87,10 +87,17 @@ pub async fn run(mut node: RosNode, cfg: VirtualRigNodeConfig, shutdown: Shutdow
     let clock = node.publisher::<Clock>(SuiteTopic::Clock)?;
     let setpoints = node.subscription::<RigSetpoint>(SuiteTopic::RigSetpoint)?;
     let mut setpoint_stream = Box::pin(setpoints.async_stream());
+    // A reliable writer whose history is full (a slow subscriber) reports WouldBlock after its
+    // wait: that is back-pressure, not a fault — the rig holds the sample and tries again, and
+    // gives up only after ~10 s of refusals (a subscriber that is gone for good).
     let publish = |s: &RigSample| -> Result<(), VirtualRigNodeError> {
-        samples
-            .publish(s.clone())
-            .map_err(|e| VirtualRigNodeError::Publish { topic: "sample", detail: format!("{e:?}") })?;
+        let mut tries = 0u32;
+        while let Err(e) = samples.publish(s.clone()) {
+            tries += 1;
+            if tries >= 50 {
+                return Err(VirtualRigNodeError::Publish { topic: "sample", detail: format!("{e:?}") });
+            }
+        }
         let _ = clock.publish(Clock { clock: s.header.stamp });
         Ok(())
     };
