@@ -146,7 +146,9 @@ mod tests {
         assert_eq!(s.seq, 13);
         assert_eq!(s.runtime_s, 10.5);
         assert_eq!(s.fx_n, 10.625);
-        assert_eq!(s.rig_mode, (10 + 22) as u8);
+        // rig_mode follows the 18 float64 channels after seq: leaf k = 4 + 17 = 21.
+        assert_eq!(s.rig_mode, (10 + 21) as u8);
+        assert_eq!(s.fault_flags, 10 + 22);
     }
 
     #[test]
