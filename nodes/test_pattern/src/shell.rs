@@ -22,6 +22,14 @@ pub struct TestPatternConfig {
     /// Relative or full topic names; absent = every suite topic.
     #[serde(default)]
     pub topics: Option<Vec<String>>,
+    /// After the last message, stay up this long so reliable DDS can retransmit anything a
+    /// subscriber missed: a writer that exits at once can lose its last samples [s].
+    #[serde(default = "default_linger")]
+    pub linger_s: f64,
+}
+
+fn default_linger() -> f64 {
+    2.0
 }
 
 fn default_rate() -> f64 {
@@ -97,6 +105,10 @@ pub async fn run(mut node: RosNode, cfg: TestPatternConfig, shutdown: Shutdown) 
             publish(n).map_err(|detail| TestPatternError::Publish { topic: topic.clone(), detail })?;
         }
         n += 1;
+    }
+    tokio::select! {
+        _ = shutdown.wait() => {}
+        _ = tokio::time::sleep(Duration::from_secs_f64(cfg.linger_s.max(0.0))) => {}
     }
     tracing::info!(messages_per_topic = n, "test pattern done");
     Ok(n)
