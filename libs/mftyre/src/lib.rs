@@ -13,6 +13,8 @@
 //! (the output flags [`Clamped::PHIT_IGNORED`]), and turn-slip use modes are rejected.
 
 mod batch;
+mod kernel;
+mod lanes;
 mod model;
 mod params;
 mod tir;

@@ -140,6 +140,11 @@ impl Clamped {
         Clamped { bits: 0 }
     }
 
+    /// From raw bits (the batch kernel builds flags per lane).
+    pub(crate) const fn from_bits(bits: u8) -> Self {
+        Clamped { bits }
+    }
+
     /// The raw bits.
     pub const fn bits(self) -> u8 {
         self.bits
@@ -456,8 +461,6 @@ struct FyLoad {
 /// points, so batches compute this once per run of equal load cases.
 #[derive(Clone, Copy, Default)]
 struct LoadTerms {
-    /// Bit patterns of (Fz, Fz_low, uFz, p, γ, low-speed factor) this was computed for.
-    key: [u64; 6],
     fz0: f64,
     gamma_s: f64,
     // Pure Fx (4.E9–4.E18).
@@ -501,17 +504,6 @@ struct LoadTerms {
     b_m: f64,
     cx_carcass: f64,
     cy_carcass: f64,
-}
-
-fn load_key(x: &Prepared) -> [u64; 6] {
-    [
-        x.fz.to_bits(),
-        x.fz_low.to_bits(),
-        x.u_fz.to_bits(),
-        x.press.to_bits(),
-        x.gamma.to_bits(),
-        x.reduction_smooth.to_bits(),
-    ]
 }
 
 /// Cornering stiffness Kyα (4.E25) at a given γ*.
@@ -574,7 +566,7 @@ fn fy_kernel(f: &FyLoad, mode: UseMode, alpha_s: f64, vcx: f64) -> f64 {
 
 /// (Fz/Fz0)^QSY7 · (p/p0)^QSY8 with one exp instead of two powf calls.
 #[inline(always)]
-fn load_pressure_factor(fz_r: f64, p_r: f64, qsy7: f64, qsy8: f64) -> f64 {
+pub(crate) fn load_pressure_factor(fz_r: f64, p_r: f64, qsy7: f64, qsy8: f64) -> f64 {
     if fz_r > 0.0 && p_r > 0.0 { (qsy7 * fz_r.ln() + qsy8 * p_r.ln()).exp() } else { fz_r.powf(qsy7) * p_r.powf(qsy8) }
 }
 
@@ -692,7 +684,6 @@ impl LoadTerms {
         let cy_carcass = st.lateral_stiffness * (1.0 + st.pcfy1 * dfz + st.pcfy2 * dfz * dfz) * (1.0 + st.pcfy3 * dpi);
 
         LoadTerms {
-            key: load_key(x),
             fz0,
             gamma_s,
             fx: fxl,
@@ -971,33 +962,6 @@ pub fn evaluate_scaled(params: &TyreParams, scaling: &ScalingFactors, mode: UseM
     let x = prepare(params, mode, input);
     let lt = LoadTerms::new(params, scaling, mode, &x);
     eval_point(params, scaling, mode, input, &x, &lt)
-}
-
-/// Evaluates a sequence of points, recomputing the load-case terms only when Fz, pressure,
-/// camber or the low-speed factor change from one point to the next (as within a sweep).
-/// Results are identical to calling [`evaluate_scaled`] per point.
-pub(crate) struct SweepEvaluator<'a> {
-    params: &'a TyreParams,
-    scaling: &'a ScalingFactors,
-    mode: UseMode,
-    cache: Option<LoadTerms>,
-}
-
-impl<'a> SweepEvaluator<'a> {
-    pub(crate) fn new(params: &'a TyreParams, scaling: &'a ScalingFactors, mode: UseMode) -> Self {
-        Self { params, scaling, mode, cache: None }
-    }
-
-    #[inline(always)]
-    pub(crate) fn eval(&mut self, input: &MfInput) -> MfOutput {
-        let x = prepare(self.params, self.mode, input);
-        let key = load_key(&x);
-        let lt = match self.cache {
-            Some(ref lt) if lt.key == key => lt,
-            _ => self.cache.insert(LoadTerms::new(self.params, self.scaling, self.mode, &x)),
-        };
-        eval_point(self.params, self.scaling, self.mode, input, &x, lt)
-    }
 }
 
 /// Pure lateral force Fy0 only (no combined slip, no moments): the cheapest useful call,
