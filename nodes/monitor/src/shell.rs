@@ -13,8 +13,67 @@ use node_runtime::{RosNode, RuntimeError, Shutdown, SuiteTopic};
 use tyre_msgs::diagnostic_msgs::DiagnosticArray;
 use tyre_msgs::{LiveChannels, ProcedureState, QualityReport, RigSample, SweepSummary};
 
-use crate::config::{MonitorConfig, TyreInfo};
-use crate::pipeline::{Pipeline, PipelineError};
+use crate::config::{ConfigError, MonitorConfig, TyreInfo};
+use crate::pipeline::{Pipeline, PipelineError, PipelineOutput};
+
+/// The quality node's config (`[node.config]` of a launch file with `kind = "quality"`).
+#[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct QualityNodeConfig {
+    /// The ETRTO load index the tyre declares (sidewall, data sheet): the monitor judges the
+    /// loads against this rating, not against what the operator typed in at the rig.
+    pub load_index: u32,
+    /// Tread depth of the new tyre [mm].
+    pub tread_new_mm: f64,
+    /// Legal minimum tread depth [mm].
+    pub tread_min_mm: f64,
+    /// The channels core's settings.
+    pub channels: channels::ChannelsConfig,
+    /// The monitor core's settings (thresholds).
+    pub monitor: MonitorConfig,
+}
+
+impl Default for QualityNodeConfig {
+    fn default() -> Self {
+        Self {
+            load_index: 110,
+            tread_new_mm: 5.6,
+            tread_min_mm: 1.6,
+            channels: channels::ChannelsConfig::default(),
+            monitor: MonitorConfig::default(),
+        }
+    }
+}
+
+impl QualityNodeConfig {
+    /// The tyre as the monitor sees it; an unknown load index or a tread depth that is not
+    /// positive and above the minimum is refused.
+    pub fn tyre(&self) -> Result<TyreInfo, ConfigError> {
+        let mut t = TyreInfo::from_load_index(self.load_index)?;
+        if !(self.tread_min_mm.is_finite() && self.tread_min_mm >= 0.0) {
+            return Err(ConfigError::Invalid {
+                key: "tread_min_mm",
+                value: self.tread_min_mm,
+                reason: "needs a finite depth ≥ 0 mm",
+            });
+        }
+        if !(self.tread_new_mm.is_finite() && self.tread_new_mm > self.tread_min_mm) {
+            return Err(ConfigError::Invalid {
+                key: "tread_new_mm",
+                value: self.tread_new_mm,
+                reason: "needs a finite depth above tread_min_mm",
+            });
+        }
+        t.tread_new_mm = self.tread_new_mm;
+        t.tread_min_mm = self.tread_min_mm;
+        Ok(t)
+    }
+
+    /// Checks every setting (also done when the node starts).
+    pub fn validate(&self) -> Result<(), PipelineError> {
+        Pipeline::new(self.channels.clone(), self.monitor.clone(), self.tyre()?).map(|_| ())
+    }
+}
 
 /// Why the node stopped with an error.
 #[derive(Debug, thiserror::Error)]
@@ -22,20 +81,18 @@ pub enum QualityNodeError {
     /// A configuration was refused.
     #[error(transparent)]
     Config(#[from] PipelineError),
+    /// The tyre's rating or tread depths were refused.
+    #[error(transparent)]
+    Tyre(#[from] ConfigError),
     /// DDS failed.
     #[error(transparent)]
     Runtime(#[from] RuntimeError),
 }
 
 /// Runs the channels and monitor cores until shutdown.
-pub async fn run(
-    mut node: RosNode,
-    channels_cfg: channels::ChannelsConfig,
-    monitor_cfg: MonitorConfig,
-    tyre: TyreInfo,
-    shutdown: Shutdown,
-) -> Result<(), QualityNodeError> {
-    let mut p = Pipeline::new(channels_cfg, monitor_cfg, tyre)?;
+pub async fn run(mut node: RosNode, cfg: QualityNodeConfig, shutdown: Shutdown) -> Result<(), QualityNodeError> {
+    let tyre = cfg.tyre()?;
+    let mut p = Pipeline::new(cfg.channels, cfg.monitor, tyre)?;
     let live_pub = node.publisher::<LiveChannels>(SuiteTopic::LiveChannels)?;
     let sum_pub = node.publisher::<SweepSummary>(SuiteTopic::SweepSummary)?;
     let rep_pub = node.publisher::<QualityReport>(SuiteTopic::QualityReport)?;
@@ -46,6 +103,34 @@ pub async fn run(
     let mut states = Box::pin(states.async_stream());
     // The late joiner's view: the current verdicts at once.
     let _ = rep_pub.publish(p.monitor.report(0.0));
+    let publish = |o: PipelineOutput, live: bool| {
+        if live && let Err(e) = live_pub.publish(o.live) {
+            tracing::warn!("channels/live publish: {e:?}");
+        }
+        for x in o.sweep_summaries {
+            let _ = sum_pub.publish(x);
+        }
+        for d in &o.derived {
+            tracing::info!(
+                "{}: {} = {} {} (Fz {:.0} N, p {:.0} Pa)",
+                d.section,
+                d.quantity.name(),
+                d.value,
+                d.quantity.unit(),
+                d.fz_n,
+                d.pressure_pa
+            );
+        }
+        for a in &o.alarms {
+            tracing::warn!("{} {} at {:.1} s: {}", a.level, a.check, a.rig_time_s, a.message);
+        }
+        if let Some(r) = o.report {
+            let _ = rep_pub.publish(r);
+        }
+        if let Some(d) = o.diagnostics {
+            let _ = diag_pub.publish(d);
+        }
+    };
     loop {
         tokio::select! {
             _ = shutdown.wait() => break,
@@ -55,31 +140,13 @@ pub async fn run(
                 None => break,
             },
             item = samples.next() => match item {
-                Some(Ok((s, _))) => {
-                    let o = p.on_sample(&s);
-                    if let Err(e) = live_pub.publish(o.live) {
-                        tracing::warn!("channels/live publish: {e:?}");
-                    }
-                    for x in o.sweep_summaries {
-                        let _ = sum_pub.publish(x);
-                    }
-                    for d in &o.derived {
-                        tracing::info!("{}: {} = {} {} (Fz {:.0} N, p {:.0} Pa)", d.section, d.quantity.name(), d.value, d.quantity.unit(), d.fz_n, d.pressure_pa);
-                    }
-                    for a in &o.alarms {
-                        tracing::warn!("{} {} at {:.1} s: {}", a.level, a.check, a.rig_time_s, a.message);
-                    }
-                    if let Some(r) = o.report {
-                        let _ = rep_pub.publish(r);
-                    }
-                    if let Some(d) = o.diagnostics {
-                        let _ = diag_pub.publish(d);
-                    }
-                }
+                Some(Ok((s, _))) => publish(p.on_sample(&s), true),
                 Some(Err(e)) => tracing::warn!("sample: {e:?}"),
                 None => break,
             },
         }
     }
+    // The sweep in progress and the final verdicts (a recorder still running logs them).
+    publish(p.finish(), false);
     Ok(())
 }

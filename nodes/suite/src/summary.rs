@@ -207,16 +207,40 @@ impl SummaryBuilder {
 #[error("{0}")]
 pub struct LogSummaryError(pub String);
 
-/// Summarises a recorded run from its `procedure/state`, `thermal/state` and `/diagnostics`
-/// topics alone, so it works for any log: a DDS run, a headless one, a real rig's.
+/// The measured wear of each specimen from a log: the last finite `wear_mm` of the quality
+/// reports published while it was on the rig (specimens are separated by the starts of tyre
+/// changes). A specimen with no finite figure (no wear hold measured yet) is left out, and so
+/// is everything when the log has no quality reports (the monitor did not run).
+fn wear_by_specimen(reports: &[(u64, tyre_msgs::QualityReport)], tyre_changes_at_s: &[f64]) -> Vec<f64> {
+    let mut out = Vec::new();
+    let mut specimen = 0;
+    let mut last: Option<f64> = None;
+    for (_, r) in reports {
+        let t = r.header.stamp.as_secs_f64();
+        while specimen < tyre_changes_at_s.len() && t >= tyre_changes_at_s[specimen] {
+            out.extend(last.take());
+            specimen += 1;
+        }
+        if r.wear_mm.is_finite() {
+            last = Some(r.wear_mm);
+        }
+    }
+    out.extend(last);
+    out
+}
+
+/// Summarises a recorded run from its `procedure/state`, `thermal/state`, `/diagnostics` and
+/// `quality/report` topics alone, so it works for any log: a DDS run, a headless one, a real rig's.
 /// Resolution is the state's publishing period (on change, at least 2 Hz).
 pub fn summary_from_log(log: &mcaplog::LogReader, namespace: &str) -> Result<RunSummary, LogSummaryError> {
-    use tyre_msgs::{ProcedureState as PS, ThermalState as TS, diagnostic_msgs::DiagnosticArray};
+    use tyre_msgs::{ProcedureState as PS, QualityReport, ThermalState as TS, diagnostic_msgs::DiagnosticArray};
     let ns = namespace.trim_end_matches('/');
     let err = |e: mcaplog::LogError| LogSummaryError(e.to_string());
     let states = log.typed::<PS>(&format!("{ns}/{}", tyre_msgs::topics::PROCEDURE_STATE)).map_err(err)?;
     let thermal = log.typed::<TS>(&format!("{ns}/{}", tyre_msgs::topics::THERMAL_STATE)).map_err(err)?;
     let diags = log.typed::<DiagnosticArray>(tyre_msgs::topics::DIAGNOSTICS).map_err(err)?;
+    let reports = log.typed::<QualityReport>(&format!("{ns}/{}", tyre_msgs::topics::QUALITY_REPORT)).map_err(err)?;
+    let mut tyre_changes_at_s = Vec::new();
     let mut b =
         SummaryBuilder::new(log.metadata().get("procedure").and_then(|m| m.get("name")).map_or("", |s| s.as_str()));
     let mut prev: Option<&PS> = None;
@@ -236,6 +260,7 @@ pub fn summary_from_log(log: &mcaplog::LogReader, namespace: &str) -> Result<Run
             }
             if st.phase == PS::PHASE_TYRE_CHANGE && p.phase != PS::PHASE_TYRE_CHANGE {
                 b.summary.tyre_changes += 1;
+                tyre_changes_at_s.push(st.header.stamp.as_secs_f64());
             }
         } else if st.phase == PS::PHASE_TYRE_CHANGE {
             b.summary.tyre_changes += 1;
@@ -272,5 +297,6 @@ pub fn summary_from_log(log: &mcaplog::LogReader, namespace: &str) -> Result<Run
         }
     }
     b.summary.tyres_used = b.summary.tyre_changes.max(1);
+    b.summary.wear_mm_measured = wear_by_specimen(&reports, &tyre_changes_at_s);
     Ok(b.summary)
 }

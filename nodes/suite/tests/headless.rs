@@ -50,8 +50,9 @@ fn gs2mf_takes_at_most_27_percent_of_square_matrix_rig_time() {
 #[test]
 fn summary_from_the_log_matches_the_live_summary() {
     let dir = tempfile::tempdir().expect("tempdir");
-    let path = dir.path().join("staticlong.mcap");
-    let spec = RunSpec::new(&launch_config(), ProcedureChoice::StaticLong);
+    let path = dir.path().join("freerolling.mcap");
+    // FreeRolling: long enough for the monitor to measure wear, so the log's figure is checked.
+    let spec = RunSpec::new(&launch_config(), ProcedureChoice::FreeRolling);
     let mut h = Headless::new(&spec, thermal::ThermalConfig::default(), sequencer::SequencerConfig::default())
         .expect("headless");
     let mut sink = suite::McapSink::create(&path, "/rig", &h.metadata(&spec)).expect("log");
@@ -69,6 +70,10 @@ fn summary_from_the_log_matches_the_live_summary() {
         from_log.total_rig_time_s,
         live.total_rig_time_s
     );
+    let finite = |v: &[f64]| v.iter().copied().filter(|w| w.is_finite()).collect::<Vec<_>>();
+    println!("wear measured: live {:?}, from log {:?}", live.wear_mm_measured, from_log.wear_mm_measured);
+    assert!(!finite(&live.wear_mm_measured).is_empty(), "the monitor measured no wear");
+    assert_eq!(finite(&from_log.wear_mm_measured), finite(&live.wear_mm_measured));
 }
 
 /// Records when the first section whose name starts with `prefix` ends.

@@ -128,8 +128,9 @@ fn path_value(p: &std::path::Path) -> anyhow::Result<toml::Value> {
     Ok(toml::Value::String(abs.display().to_string()))
 }
 
-/// The suite over DDS: virtual rig (lockstep clock), thermal gate, sequencer and recorder, each
-/// its own participant in this process; the summary is computed from the recorded log.
+/// The suite over DDS: virtual rig (lockstep clock), thermal gate, sequencer, quality (live
+/// channels + monitor) and recorder, each its own participant in this process; the summary is
+/// computed from the recorded log.
 fn run_dds(args: &RunArgs) -> anyhow::Result<()> {
     use crate::launch::{NodeEntry, run_node};
     use node_runtime::{RosNode, RuntimeConfig, Shutdown, SuiteTopic};
@@ -138,9 +139,17 @@ fn run_dds(args: &RunArgs) -> anyhow::Result<()> {
     let spec = spec_of(args);
     // The headless suite validates every input and gives the metadata the log carries.
     let headless = Headless::new(&spec, thermal::ThermalConfig::default(), sequencer::SequencerConfig::default())?;
-    let metadata = headless.metadata(&spec);
+    let mut metadata = headless.metadata(&spec);
     let planned = headless.plan().estimate_total_s(&procedure::PauseModel::default());
     drop(headless);
+    if let Some(sw) = metadata.get_mut("tyrerig") {
+        sw.insert("mode".to_owned(), "dds".to_owned());
+        sw.insert("log_time".to_owned(), "when the recorder received the message (wall clock), ns".to_owned());
+    }
+    // The monitor judges the loads against the tyre's own rating (as headless runs do), not
+    // against the index the operator entered.
+    let (_, params) = suite::headless::rig_config(&spec)?;
+    let declared_index = suite::headless::declared_load_index(&params);
 
     let mut rig = vec![
         ("rig_config", path_value(&spec.rig_config)?),
@@ -165,10 +174,12 @@ fn run_dds(args: &RunArgs) -> anyhow::Result<()> {
         .map(|(k, m)| (k.clone(), V::Table(m.iter().map(|(a, b)| (a.clone(), V::String(b.clone()))).collect())))
         .collect();
     let recorder = vec![("output", path_value(&args.out)?), ("metadata", V::Table(md))];
+    let quality = vec![("load_index", V::Integer(i64::from(declared_index)))];
     let nodes = [
         NodeEntry { name: "recorder".into(), kind: "recorder".into(), config: table(&recorder) },
         NodeEntry { name: "thermal".into(), kind: "thermal".into(), config: toml::Table::new() },
         NodeEntry { name: "sequencer".into(), kind: "sequencer".into(), config: table(&sequencer) },
+        NodeEntry { name: "quality".into(), kind: "quality".into(), config: table(&quality) },
         NodeEntry { name: "virtual_rig".into(), kind: "virtual_rig".into(), config: table(&rig) },
     ];
     let runtime = RuntimeConfig::default();
@@ -181,15 +192,25 @@ fn run_dds(args: &RunArgs) -> anyhow::Result<()> {
     );
     bar.set_prefix(format!("{} over DDS (planned ~{planned:.0} s rig time)", args.procedure.name()));
     rt.block_on(async {
+        // Two stops: the producers first, then (once their last messages are out) the recorder,
+        // so the log holds everything the nodes published, the quality node's final verdicts too.
         let shutdown = Shutdown::new();
+        let recorder_shutdown = Shutdown::new();
         shutdown.on_signals()?;
         let mut tasks = tokio::task::JoinSet::new();
+        let mut recorder_task = None;
         for entry in nodes {
-            let (rt_cfg, sd) = (runtime.clone(), shutdown.clone());
-            tasks.spawn(async move {
-                let r = run_node(&entry, &rt_cfg, sd).await;
-                (entry.name, r)
-            });
+            let rt_cfg = runtime.clone();
+            if entry.kind == "recorder" {
+                let sd = recorder_shutdown.clone();
+                recorder_task = Some(tokio::spawn(async move { run_node(&entry, &rt_cfg, sd).await }));
+            } else {
+                let sd = shutdown.clone();
+                tasks.spawn(async move {
+                    let r = run_node(&entry, &rt_cfg, sd).await;
+                    (entry.name, r)
+                });
+            }
         }
         // Watch the procedure like a control room would, and end the run when it ends.
         let mut watcher = RosNode::new("run_watcher", &runtime)?;
@@ -205,19 +226,50 @@ fn run_dds(args: &RunArgs) -> anyhow::Result<()> {
                 }
             }
         };
+        let mut recorder_task = recorder_task.context("the node list has no recorder")?;
+        let mut recorder_ended = false;
         let mut failed: Option<anyhow::Error> = None;
-        tokio::select! {
-            _ = shutdown.wait() => {}
-            phase = watch => {
-                tracing::info!(phase, "procedure ended; stopping the suite");
-                // Let the last messages reach the recorder.
-                tokio::time::sleep(std::time::Duration::from_secs(1)).await;
-            }
-            // A node that fails while the procedure runs ends the run at once (the recorder
-            // still completes its file), instead of leaving the watcher waiting forever.
-            Some(done) = tasks.join_next() => {
-                if let Ok((name, Err(e))) = done {
-                    failed = Some(e.context(format!("node {name}")));
+        tokio::pin!(watch);
+        // A node that ends normally (the sequencer exits when its procedure is done) does not end
+        // the run by itself: the watcher still has to see the final state, within a grace period.
+        let mut grace: Option<std::pin::Pin<Box<tokio::time::Sleep>>> = None;
+        loop {
+            tokio::select! {
+                _ = shutdown.wait() => break,
+                // A recorder that stops (disk full, file refused) ends the run: nothing would be kept.
+                r = &mut recorder_task => {
+                    recorder_ended = true;
+                    failed = Some(match r {
+                        Ok(Err(e)) => e.context("node recorder"),
+                        Ok(Ok(())) => anyhow::anyhow!("the recorder stopped before the procedure ended"),
+                        Err(e) => anyhow::anyhow!("node recorder: {e}"),
+                    });
+                    break;
+                }
+                phase = &mut watch => {
+                    tracing::info!(phase, "procedure ended; stopping the suite");
+                    // Let the last messages reach the other nodes.
+                    tokio::time::sleep(std::time::Duration::from_secs(1)).await;
+                    break;
+                }
+                // A node that fails while the procedure runs ends the run at once (the recorder
+                // still completes its file), instead of leaving the watcher waiting forever.
+                Some(done) = tasks.join_next() => match done {
+                    Ok((_, Ok(()))) => {
+                        grace.get_or_insert_with(|| Box::pin(tokio::time::sleep(std::time::Duration::from_secs(5))));
+                    }
+                    Ok((name, Err(e))) => {
+                        failed = Some(e.context(format!("node {name}")));
+                        break;
+                    }
+                    Err(e) => {
+                        failed = Some(anyhow::anyhow!("a node task failed: {e}"));
+                        break;
+                    }
+                },
+                _ = async { grace.as_mut().expect("guarded").await }, if grace.is_some() => {
+                    tracing::warn!("a node ended but the procedure's final state never came; stopping the suite");
+                    break;
                 }
             }
         }
@@ -226,6 +278,12 @@ fn run_dds(args: &RunArgs) -> anyhow::Result<()> {
             if let Ok((name, Err(e))) = done {
                 failed.get_or_insert(e.context(format!("node {name}")));
             }
+        }
+        // The producers' final messages (reliable QoS) need a moment to arrive.
+        tokio::time::sleep(std::time::Duration::from_millis(500)).await;
+        recorder_shutdown.trigger();
+        if !recorder_ended && let Ok(Err(e)) = recorder_task.await {
+            failed.get_or_insert(e.context("node recorder"));
         }
         if let Some(e) = failed {
             return Err(e);

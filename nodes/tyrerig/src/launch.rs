@@ -47,11 +47,19 @@ pub enum NodeKind {
     VirtualRig,
     Thermal,
     Sequencer,
+    /// Live channels and the quality monitor in one node (`monitor::shell`).
+    Quality,
 }
 
 impl NodeKind {
-    pub const ALL: [NodeKind; 5] =
-        [NodeKind::Recorder, NodeKind::TestPattern, NodeKind::VirtualRig, NodeKind::Thermal, NodeKind::Sequencer];
+    pub const ALL: [NodeKind; 6] = [
+        NodeKind::Recorder,
+        NodeKind::TestPattern,
+        NodeKind::VirtualRig,
+        NodeKind::Thermal,
+        NodeKind::Sequencer,
+        NodeKind::Quality,
+    ];
 
     pub fn name(self) -> &'static str {
         match self {
@@ -60,6 +68,7 @@ impl NodeKind {
             NodeKind::VirtualRig => "virtual_rig",
             NodeKind::Thermal => "thermal",
             NodeKind::Sequencer => "sequencer",
+            NodeKind::Quality => "quality",
         }
     }
 
@@ -141,6 +150,10 @@ fn typed_config_check(entry: &NodeEntry) -> anyhow::Result<()> {
             let c: sequencer::shell::SequencerNodeConfig = config_of(entry)?;
             c.core.validate()?;
         }
+        Some(NodeKind::Quality) => {
+            let c: monitor::shell::QualityNodeConfig = config_of(entry)?;
+            c.validate()?;
+        }
         None => bail!("unknown node kind {:?}", entry.kind),
     }
     Ok(())
@@ -176,7 +189,49 @@ pub async fn run_node(entry: &NodeEntry, runtime: &RuntimeConfig, shutdown: Shut
             c.checkpoint = c.checkpoint.map(|p| resolve(entry, &p));
             sequencer::shell::run(node, c, shutdown).await?;
         }
+        Some(NodeKind::Quality) => {
+            let c: monitor::shell::QualityNodeConfig = config_of(entry)?;
+            monitor::shell::run(node, c, shutdown).await?;
+        }
         None => bail!("unknown node kind {:?}", entry.kind),
     }
     Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn launch_config() -> PathBuf {
+        PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../launch-config")
+    }
+
+    #[test]
+    fn the_shipped_launch_files_load() {
+        for name in ["demo.toml", "suite.toml"] {
+            let file = LaunchFile::load(&launch_config().join(name)).unwrap_or_else(|e| panic!("{name}: {e:#}"));
+            assert!(!file.nodes.is_empty(), "{name}");
+        }
+        let suite = LaunchFile::load(&launch_config().join("suite.toml")).expect("suite.toml");
+        let kinds: Vec<_> = suite.nodes.iter().map(|n| n.kind.as_str()).collect();
+        for k in ["recorder", "virtual_rig", "thermal", "sequencer", "quality"] {
+            assert!(kinds.contains(&k), "suite.toml has no {k} node: {kinds:?}");
+        }
+    }
+
+    #[test]
+    fn a_bad_quality_config_is_refused_naming_the_node_and_key() {
+        let dir = tempfile::tempdir().expect("tempdir");
+        let path = dir.path().join("bad.toml");
+        for (body, expect) in [
+            ("load_index = 3", "load index 3"),
+            ("tread_new_mm = 1.0", "tread_new_mm"),
+            ("lod_index = 110", "lod_index"),
+        ] {
+            std::fs::write(&path, format!("[[node]]\nname = \"q\"\nkind = \"quality\"\n[node.config]\n{body}\n"))
+                .expect("write");
+            let err = format!("{:#}", LaunchFile::load(&path).expect_err(body));
+            assert!(err.contains("bad.toml") && err.contains("\"q\"") && err.contains(expect), "{body}: {err}");
+        }
+    }
 }
