@@ -245,6 +245,10 @@ pub struct VirtualRig {
     pressure_pa: f64,
     speed_mps: f64,
     belt_disp_m: f64,
+    /// Belt velocity in static mode (d belt displacement / dt of the last step) [m/s].
+    belt_vel_mps: f64,
+    /// Position-encoder error of the last static sample [m] (see [`VirtualRig::sample`]).
+    belt_encoder_err_m: f64,
     static_elastic_m: f64,
     commanded_slip_ratio_rate: f64,
 
@@ -320,6 +324,8 @@ impl VirtualRig {
             pressure_pa: p0,
             speed_mps: 0.0,
             belt_disp_m: 0.0,
+            belt_vel_mps: 0.0,
+            belt_encoder_err_m: 0.0,
             static_elastic_m: 0.0,
             commanded_slip_ratio_rate: 0.0,
             alpha_relaxed_deg: 0.0,
@@ -591,8 +597,10 @@ impl VirtualRig {
             self.belt_disp_m =
                 slew(self.belt_disp_m, self.targets.belt_displacement_m, self.cfg.rig.static_belt_speed_mps, dt);
             self.static_elastic_m += self.belt_disp_m - before;
+            self.belt_vel_mps = (self.belt_disp_m - before) / dt;
         } else {
             self.belt_disp_m = 0.0;
+            self.belt_vel_mps = 0.0;
             self.static_elastic_m = 0.0;
         }
 
@@ -788,6 +796,22 @@ impl VirtualRig {
 
         let chatter = self.chatter_n(t);
         let statik = mode == RigSetpoint::MODE_STATIC;
+        // TRAJVELW. Rolling: the belt speed plus white sensor noise. Static (wheel locked, belt
+        // crawling under it): the belt's signed velocity d(displacement)/dt as the rig's belt
+        // position encoder gives it, differenced between samples, so its noise is the difference
+        // of two position errors (same 1σ per sample as rolling: position error σ =
+        // speed noise × sample interval / √2) and TRAJVELW integrates back to the belt's
+        // displacement (LONGDISP) without a random walk.
+        let trajvelw = if statik {
+            let dt_pub = self.dt_s * self.publish_every as f64;
+            let err = v_noise * dt_pub / std::f64::consts::SQRT_2;
+            let v = self.belt_vel_mps + (err - self.belt_encoder_err_m) / dt_pub;
+            self.belt_encoder_err_m = err;
+            v
+        } else {
+            self.belt_encoder_err_m = 0.0;
+            self.speed_mps + v_noise
+        };
         let worn_m = if self.effects.wear { self.tread_worn_mm * 1e-3 } else { 0.0 };
         let rl = if m.valid { m.mf.rl_m - worn_m } else { self.params.unloaded_radius_m() - worn_m };
         // DSTWOWHC at the rig's 0.1 mm resolution.
@@ -825,8 +849,7 @@ impl VirtualRig {
             longslip: if coupled { rim_kappa + sr_noise } else { self.slip_ratio.pos + sr_noise },
             inclangl_deg: self.camber_deg + ca_noise,
             inflpres_pa: self.pressure_pa + p_noise,
-            trajvelw_mps: if statik { self.cfg.rig.static_belt_speed_mps.min(self.speed_mps.max(0.0)) } else { vx }
-                + v_noise,
+            trajvelw_mps: trajvelw,
             wheel_speed_radps: omega,
             dstwowhc_m: dst,
             trdtempi_c: temps[0] + ti_noise,

@@ -326,6 +326,52 @@ fn static_longitudinal_force_is_linear_in_belt_displacement() {
     assert!((f1 / f2 - 2.0).abs() < 0.05, "{f1} {f2}");
 }
 
+/// Static mode reports the belt's real, signed velocity (with noise), so integrating TRAJVELW
+/// over a static drag (LONGDISP, as the channels node does: trapezoid) gives back the belt's
+/// displacement, there and back again.
+#[test]
+fn static_drag_trajvelw_integrates_to_the_belt_displacement() {
+    for seed in [1, 2, 3] {
+        let mut rig = rig_with(Effects::ALL, seed);
+        let belt_speed = rig.config().rig.static_belt_speed_mps;
+        let mut s = sp(RigSetpoint::MODE_FREE_ROLLING, 0.0, 0.0, 5000.0);
+        s.speed_mps = 1.0;
+        rig.apply_setpoint(&s).unwrap();
+        rig.run_until(6.0, &mut |_| {});
+        s.speed_mps = 0.0;
+        rig.apply_setpoint(&s).unwrap();
+        rig.run_until(9.0, &mut |_| {});
+        s.mode = RigSetpoint::MODE_STATIC;
+        rig.apply_setpoint(&s).unwrap();
+        let mut samples = Vec::new();
+        rig.run_until(10.0, &mut |x| samples.push(x.clone()));
+        s.belt_displacement_m = 0.1;
+        rig.apply_setpoint(&s).unwrap();
+        rig.run_until(16.0, &mut |x| samples.push(x.clone()));
+        let n_out = samples.len();
+        s.belt_displacement_m = 0.04;
+        rig.apply_setpoint(&s).unwrap();
+        rig.run_until(20.0, &mut |x| samples.push(x.clone()));
+        assert!(samples.iter().all(|x| x.rig_mode == RigSetpoint::MODE_STATIC));
+        let longdisp = |xs: &[RigSample]| -> f64 {
+            xs.windows(2)
+                .map(|w| 0.5 * (w[0].trajvelw_mps + w[1].trajvelw_mps) * (w[1].runtime_s - w[0].runtime_s))
+                .sum()
+        };
+        let out = longdisp(&samples[..n_out]);
+        let back = longdisp(&samples);
+        assert!((out - 0.1).abs() < 0.002, "seed {seed}: LONGDISP {out} m after a 0.1 m drag");
+        assert!((back - 0.04).abs() < 0.002, "seed {seed}: LONGDISP {back} m after moving back to 0.04 m");
+        // While the belt moves, TRAJVELW reads its speed (mean over the drag), signed.
+        let moving: Vec<f64> = samples[100..550].iter().map(|x| x.trajvelw_mps).collect();
+        let mean = moving.iter().sum::<f64>() / moving.len() as f64;
+        assert!((mean - belt_speed).abs() < 0.05 * belt_speed, "seed {seed}: mean TRAJVELW {mean}");
+        let returning: Vec<f64> = samples[n_out + 50..n_out + 250].iter().map(|x| x.trajvelw_mps).collect();
+        let mean_back = returning.iter().sum::<f64>() / returning.len() as f64;
+        assert!((mean_back + belt_speed).abs() < 0.05 * belt_speed, "seed {seed}: mean TRAJVELW {mean_back}");
+    }
+}
+
 #[test]
 fn pressure_change_takes_about_twenty_seconds() {
     let mut rig = rig_with(Effects::NONE, 1);
