@@ -16,8 +16,8 @@ use tyre_msgs::{LiveChannels, ProcedureState, RigSample, RigSetpoint, SweepSumma
 use crate::config::{ChannelsConfig, ConfigError};
 use crate::derived::{self, DerivedMeasurement, OnCentreClump, Quantity, ZeroCrossings};
 
-/// A state stamped further than this ahead of the latest sample is applied at once [s].
-pub const FUTURE_STATE_S: f64 = 1.0;
+pub use crate::state_queue::FUTURE_STATE_S;
+use crate::state_queue::StateQueue;
 /// Consecutive samples further apart than this are not integrated across (a gap in the data) [s].
 const MAX_INTEGRATION_GAP_S: f64 = 1.0;
 /// Below this speed the wheel is at a standstill (step-steer, static drag) [m/s].
@@ -267,7 +267,7 @@ struct Prev {
 #[derive(Debug, Clone)]
 pub struct ChannelsCore {
     cfg: ChannelsConfig,
-    pending_states: Vec<ProcedureState>,
+    pending_states: StateQueue,
     state: ProcedureState,
     last_sample_t: f64,
 
@@ -298,7 +298,7 @@ impl ChannelsCore {
         cfg.validate()?;
         Ok(Self {
             cfg,
-            pending_states: Vec::new(),
+            pending_states: StateQueue::default(),
             state: ProcedureState::default(),
             last_sample_t: f64::NEG_INFINITY,
             segment: String::new(),
@@ -327,18 +327,15 @@ impl ChannelsCore {
 
     /// The sequencer's state (`procedure/state`). Takes effect for samples stamped after it.
     pub fn on_procedure_state(&mut self, state: &ProcedureState) {
-        let t = state.header.stamp.as_secs_f64();
-        if t > self.last_sample_t + FUTURE_STATE_S {
-            self.apply_state(state.clone());
-        } else {
-            self.pending_states.push(state.clone());
+        if let Some(now) = self.pending_states.offer(state, self.last_sample_t) {
+            self.apply_state(now);
         }
     }
 
     /// Flushes everything in progress as if the procedure had ended (end of a log): the open
     /// sweep's summary, a pending cool-down, the section's derived measurements.
     pub fn finish(&mut self) -> ChannelsOutput {
-        for s in std::mem::take(&mut self.pending_states) {
+        for s in self.pending_states.drain() {
             self.apply_state(s);
         }
         self.end_sweep();
@@ -359,14 +356,8 @@ impl ChannelsCore {
     pub fn on_sample(&mut self, s: &RigSample) -> ChannelsOutput {
         let t = if s.runtime_s.is_finite() { s.runtime_s } else { s.header.stamp.as_secs_f64() };
         // States stamped before this sample govern it (see the module docs).
-        let mut i = 0;
-        while i < self.pending_states.len() {
-            if self.pending_states[i].header.stamp.as_secs_f64() < t {
-                let st = self.pending_states.remove(i);
-                self.apply_state(st);
-            } else {
-                i += 1;
-            }
+        for st in self.pending_states.due(t) {
+            self.apply_state(st);
         }
         self.last_sample_t = self.last_sample_t.max(t);
 

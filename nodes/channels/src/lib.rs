@@ -35,7 +35,9 @@
 pub mod config;
 pub mod core;
 pub mod derived;
+pub mod state_queue;
 
 pub use config::{ChannelsConfig, ConfigError};
 pub use core::{ChannelsCore, ChannelsOutput};
 pub use derived::{DerivedMeasurement, Quantity};
+pub use state_queue::StateQueue;

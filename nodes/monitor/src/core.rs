@@ -15,8 +15,6 @@ use crate::config::{ConfigError, MonitorConfig, TyreInfo};
 use crate::drift::{self, CurveFigures, SweepCurve};
 use crate::wear::{self, Hold, HoldAcc, MatchTol, WearFit};
 
-/// A state stamped further than this ahead of the latest sample is applied at once [s].
-const FUTURE_STATE_S: f64 = 1.0;
 /// A specimen with less sliding energy than this has not been tested (sensor noise only) [J].
 const MIN_SPECIMEN_ENERGY_J: f64 = 10_000.0;
 /// The highest load GS2MF asks for, as a factor of Fz0 (BrkDrv, thesis §3.3).
@@ -93,7 +91,7 @@ struct GraphBlocks {
 pub struct MonitorCore {
     cfg: MonitorConfig,
     tyre: TyreInfo,
-    pending_states: Vec<ProcedureState>,
+    pending_states: channels::StateQueue,
     state: ProcedureState,
     last_t: f64,
     checks: Vec<QualityCheck>,
@@ -169,7 +167,7 @@ impl MonitorCore {
         Ok(Self {
             cfg,
             tyre,
-            pending_states: Vec::new(),
+            pending_states: channels::StateQueue::default(),
             state: ProcedureState::default(),
             last_t: f64::NEG_INFINITY,
             checks,
@@ -263,11 +261,8 @@ impl MonitorCore {
 
     /// The sequencer's state (`procedure/state`). Takes effect for samples stamped after it.
     pub fn on_procedure_state(&mut self, state: &ProcedureState) {
-        let t = state.header.stamp.as_secs_f64();
-        if t > self.last_t + FUTURE_STATE_S {
-            self.apply_state(state.clone());
-        } else {
-            self.pending_states.push(state.clone());
+        if let Some(now) = self.pending_states.offer(state, self.last_t) {
+            self.apply_state(now);
         }
     }
 
@@ -309,14 +304,9 @@ impl MonitorCore {
     /// One rig sample (`rig/sample`).
     pub fn on_sample(&mut self, s: &RigSample) -> MonitorOutput {
         let t = if s.runtime_s.is_finite() { s.runtime_s } else { s.header.stamp.as_secs_f64() };
-        let mut i = 0;
-        while i < self.pending_states.len() {
-            if self.pending_states[i].header.stamp.as_secs_f64() < t {
-                let st = self.pending_states.remove(i);
-                self.apply_state(st);
-            } else {
-                i += 1;
-            }
+        // States stamped before this sample govern it (`channels::state_queue`).
+        for st in self.pending_states.due(t) {
+            self.apply_state(st);
         }
         self.last_t = self.last_t.max(t);
         let forces_ok = s.fault_flags & RigSample::FAULT_FORCE == 0;
@@ -393,7 +383,7 @@ impl MonitorCore {
 
     /// Ends whatever is in progress (end of a log): the open hold and graph sweep.
     pub fn finish(&mut self) -> MonitorOutput {
-        for s in std::mem::take(&mut self.pending_states) {
+        for s in self.pending_states.drain() {
             self.apply_state(s);
         }
         let t = self.last_t;
