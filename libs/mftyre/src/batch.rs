@@ -317,52 +317,65 @@ fn chunk(inputs: &BatchInput<'_>, start: usize, n: usize) -> Inputs {
 
 /// The batch loop over the kernel; inlined into each instruction-set variant below.
 #[inline(always)]
-fn full_generic(k: &Kernel<'_>, inputs: &BatchInput<'_>, out: &mut BatchOutput) {
+fn full_generic<const F: bool>(k: &Kernel<'_>, inputs: &BatchInput<'_>, out: &mut BatchOutput) {
     let n = inputs.len();
     let mut cache = None;
     let mut start = 0;
     while start < n {
         let m = L.min(n - start);
-        let o = eval_chunk(k, &chunk(inputs, start, n), &mut cache);
-        macro_rules! store {
-            ($($f:ident),*) => { $( out.$f.extend_from_slice(&o.$f.0[..m]); )* };
+        let o = eval_chunk::<F>(k, &chunk(inputs, start, n), &mut cache);
+        if m == L {
+            // Fixed-length copies compile to plain vector stores.
+            macro_rules! store {
+                ($($f:ident),*) => { $( out.$f.extend_from_slice(&o.$f.0); )* };
+            }
+            for_each_value_column!(store);
+            out.clamped.extend_from_slice(&o.clamped);
+        } else {
+            macro_rules! store {
+                ($($f:ident),*) => { $( out.$f.extend_from_slice(&o.$f.0[..m]); )* };
+            }
+            for_each_value_column!(store);
+            out.clamped.extend_from_slice(&o.clamped[..m]);
         }
-        for_each_value_column!(store);
-        out.clamped.extend_from_slice(&o.clamped[..m]);
         start += L;
     }
 }
 
 #[inline(always)]
-fn pure_fy_generic(k: &Kernel<'_>, inputs: &BatchInput<'_>, fy_n: &mut Vec<f64>) {
+fn pure_fy_generic<const F: bool>(k: &Kernel<'_>, inputs: &BatchInput<'_>, fy_n: &mut Vec<f64>) {
     let n = inputs.len();
     let mut start = 0;
     while start < n {
         let m = L.min(n - start);
-        let fy = pure_fy_chunk(k, &chunk(inputs, start, n));
-        fy_n.extend_from_slice(&fy.0[..m]);
+        let fy = pure_fy_chunk::<F>(k, &chunk(inputs, start, n));
+        if m == L {
+            fy_n.extend_from_slice(&fy.0);
+        } else {
+            fy_n.extend_from_slice(&fy.0[..m]);
+        }
         start += L;
     }
 }
 
 fn full_portable(k: &Kernel<'_>, inputs: &BatchInput<'_>, out: &mut BatchOutput) {
-    full_generic(k, inputs, out);
+    full_generic::<false>(k, inputs, out);
 }
 
 fn pure_fy_portable(k: &Kernel<'_>, inputs: &BatchInput<'_>, fy_n: &mut Vec<f64>) {
-    pure_fy_generic(k, inputs, fy_n);
+    pure_fy_generic::<false>(k, inputs, fy_n);
 }
 
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx2,fma")]
 fn full_avx2(k: &Kernel<'_>, inputs: &BatchInput<'_>, out: &mut BatchOutput) {
-    full_generic(k, inputs, out);
+    full_generic::<true>(k, inputs, out);
 }
 
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx2,fma")]
 fn pure_fy_avx2(k: &Kernel<'_>, inputs: &BatchInput<'_>, fy_n: &mut Vec<f64>) {
-    pure_fy_generic(k, inputs, fy_n);
+    pure_fy_generic::<true>(k, inputs, fy_n);
 }
 
 /// True when the CPU runs the AVX2 build of the kernel.
@@ -409,8 +422,8 @@ mod tests {
     use super::*;
 
     /// The AVX2+FMA build of the kernel (what `evaluate_batch` runs on this CPU when available)
-    /// and the portable build give the same bits: the kernel never uses `mul_add`, so the only
-    /// difference is the vector width.
+    /// and the portable build agree to ~1e-15: they differ only in vector width and in the lane
+    /// functions' polynomials using fused multiply-add.
     #[test]
     fn dispatched_and_portable_kernels_agree() {
         let text = std::fs::read_to_string(
@@ -457,14 +470,24 @@ mod tests {
             let mut dispatched = BatchOutput::default();
             full_dispatch(&k, &inputs, &mut dispatched);
             assert_eq!(portable.len(), n);
-            for i in 0..n {
-                let (a, b) = (portable.get(i), dispatched.get(i));
-                assert_eq!(format!("{a:?}"), format!("{b:?}"), "{mode} point {i}");
+            let close = |a: f64, b: f64, scale: f64| {
+                a.to_bits() == b.to_bits() || (a - b).abs() <= 1e-13 * b.abs().max(scale) || (a.is_nan() && b.is_nan())
+            };
+            macro_rules! cmp {
+                ($($f:ident),*) => { $(
+                    let scale = portable.$f.iter().fold(0.0_f64, |m, v| m.max(v.abs()));
+                    for (i, (a, b)) in dispatched.$f.iter().zip(&portable.$f).enumerate() {
+                        assert!(close(*a, *b, scale), "{mode} point {i} {}: {a:e} vs {b:e}", stringify!($f));
+                    }
+                )* };
             }
+            for_each_value_column!(cmp);
+            assert_eq!(portable.clamped, dispatched.clamped);
             let (mut fa, mut fb) = (Vec::new(), Vec::new());
             pure_fy_portable(&k, &inputs, &mut fa);
             pure_fy_dispatch(&k, &inputs, &mut fb);
-            assert!(fa.iter().zip(&fb).all(|(a, b)| a.to_bits() == b.to_bits()), "{mode} pure Fy");
+            let scale = fa.iter().fold(0.0_f64, |m, v| m.max(v.abs()));
+            assert!(fa.iter().zip(&fb).all(|(a, b)| close(*b, *a, scale)), "{mode} pure Fy");
         }
         println!("AVX2+FMA available: {}", have_avx2());
     }

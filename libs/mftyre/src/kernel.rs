@@ -10,8 +10,8 @@
 
 use std::f64::consts::{FRAC_2_PI, FRAC_PI_2, PI};
 
-use crate::lanes::{self, L, M, V, sel};
-use crate::model::{Clamped, UseMode, load_pressure_factor};
+use crate::lanes::{Guard, L, M, V, sel};
+use crate::model::{Clamped, MfInput, MfOutput, UseMode, evaluate_scaled, load_pressure_factor, pure_fy};
 use crate::params::{ScalingFactors, TyreParams};
 
 const EPS: f64 = 1e-6;
@@ -70,6 +70,7 @@ pub(crate) struct Outputs {
 pub(crate) struct Kernel<'a> {
     p: &'a TyreParams,
     s: &'a ScalingFactors,
+    mode: UseMode,
     limits: bool,
     star: bool,
     combined: bool,
@@ -93,6 +94,7 @@ impl<'a> Kernel<'a> {
         Kernel {
             p,
             s,
+            mode,
             limits: mode.limits_check(),
             star: mode.alpha_star(),
             combined: mode.combined(),
@@ -124,9 +126,9 @@ fn cos_atan(x: V) -> V {
 }
 
 #[inline(always)]
-fn mf_arg(b: V, x: V, e: V) -> V {
+fn mf_arg<const F: bool>(gd: &Guard<F>, b: V, x: V, e: V) -> V {
     let bx = b * x;
-    bx - e * (bx - lanes::atan(bx))
+    bx - e * (bx - gd.atan(bx))
 }
 
 /// Flags per lane.
@@ -167,7 +169,7 @@ struct Prepared {
 }
 
 #[inline(always)]
-fn prepare(k: &Kernel<'_>, input: &Inputs) -> Prepared {
+fn prepare<const F: bool>(k: &Kernel<'_>, gd: &Guard<F>, input: &Inputs) -> Prepared {
     let p = k.p;
     let mut flags = Flags([0; L]);
     let neg = input.fz.lt(0.0);
@@ -191,13 +193,13 @@ fn prepare(k: &Kernel<'_>, input: &Inputs) -> Prepared {
             if low.any() {
                 flags.set(low, Clamped::LOW_SPEED);
                 let ratio = vcx / vxlow;
-                reduction_smooth = sel(low, 1.0 - 0.5 * (1.0 + lanes::cos(PI * ratio)), 1.0);
+                reduction_smooth = sel(low, 1.0 - 0.5 * (1.0 + gd.cos(PI * ratio)), 1.0);
                 kappa = sel(low, kappa * ratio.abs(), kappa);
                 kappa_out = sel(low, kappa_out * ratio.abs(), kappa_out);
             }
             let below = vcx.abs().lt(vxlow);
             if below.any() {
-                let (sa, ca) = lanes::sin_cos(alpha);
+                let (sa, ca) = gd.sin_cos(alpha);
                 let speed_sum = vcx.abs() + ((sa / ca) * vcx).abs();
                 alpha = sel(below & speed_sum.lt(vxlow), alpha * speed_sum / vxlow, alpha);
             }
@@ -232,7 +234,7 @@ struct FxLoad {
 }
 
 #[inline(always)]
-fn fx_load(k: &Kernel<'_>, x: &Prepared, dfz: V, dpi: V) -> FxLoad {
+fn fx_load<const F: bool>(k: &Kernel<'_>, gd: &Guard<F>, x: &Prepared, dfz: V, dpi: V) -> FxLoad {
     let (p, s) = (k.p, k.s);
     let c = &p.pure_fx;
     let pr = &p.pressure;
@@ -241,8 +243,7 @@ fn fx_load(k: &Kernel<'_>, x: &Prepared, dfz: V, dpi: V) -> FxLoad {
     let mux = (c.pdx2 * dfz + c.pdx1) * (1.0 + pr.ppx3 * dpi + pr.ppx4 * dpi * dpi) * (1.0 - c.pdx3 * g * g) * s.lmux;
     let mux = sel(fz.eq(0.0), 0.0, mux);
     let dx = mux * fz;
-    let kxk =
-        fz * (c.pkx2 * dfz + c.pkx1) * lanes::exp(c.pkx3 * dfz) * (1.0 + pr.ppx1 * dpi + pr.ppx2 * dpi * dpi) * s.lkx;
+    let kxk = fz * (c.pkx2 * dfz + c.pkx1) * gd.exp(c.pkx3 * dfz) * (1.0 + pr.ppx1 * dpi + pr.ppx2 * dpi * dpi) * s.lkx;
     FxLoad {
         cx,
         mux,
@@ -257,13 +258,13 @@ fn fx_load(k: &Kernel<'_>, x: &Prepared, dfz: V, dpi: V) -> FxLoad {
 }
 
 #[inline(always)]
-fn fx_kernel(k: &Kernel<'_>, f: &FxLoad, kappa: V, vcx: V) -> V {
+fn fx_kernel<const F: bool>(k: &Kernel<'_>, gd: &Guard<F>, f: &FxLoad, kappa: V, vcx: V) -> V {
     let kx = kappa + f.shx;
     let mut ex = f.ex_a * (1.0 - f.pex4 * sgn(kx));
     if k.limits {
         ex = sel(ex.gt(1.0), 1.0, ex);
     }
-    let fx0 = f.dx * lanes::sin(f.cx * lanes::atan(mf_arg(f.bx, kx, ex))) + f.svx;
+    let fx0 = f.dx * gd.sin(f.cx * gd.atan(mf_arg(gd, f.bx, kx, ex))) + f.svx;
     sel(vcx.lt(0.0), -fx0, fx0)
 }
 
@@ -282,7 +283,7 @@ struct FyLoad {
 }
 
 #[inline(always)]
-fn kya(k: &Kernel<'_>, dpi: V, fz: V, gamma_s: V) -> V {
+fn kya<const F: bool>(k: &Kernel<'_>, gd: &Guard<F>, dpi: V, fz: V, gamma_s: V) -> V {
     let (p, s) = (k.p, k.s);
     let c = &p.pure_fy;
     let pr = &p.pressure;
@@ -290,19 +291,17 @@ fn kya(k: &Kernel<'_>, dpi: V, fz: V, gamma_s: V) -> V {
         * k.fz0p
         * (1.0 + pr.ppy1 * dpi)
         * (1.0 - c.pky3 * gamma_s.abs())
-        * lanes::sin(
-            c.pky4 * lanes::atan((fz / k.fz0p) / ((c.pky2 + c.pky5 * gamma_s * gamma_s) * (1.0 + pr.ppy2 * dpi))),
-        )
+        * gd.sin(c.pky4 * gd.atan((fz / k.fz0p) / ((c.pky2 + c.pky5 * gamma_s * gamma_s) * (1.0 + pr.ppy2 * dpi))))
         * s.lky
 }
 
 #[inline(always)]
-fn fy_load(k: &Kernel<'_>, x: &Prepared, dfz: V, dpi: V, gamma_s: V) -> FyLoad {
+fn fy_load<const F: bool>(k: &Kernel<'_>, gd: &Guard<F>, x: &Prepared, dfz: V, dpi: V, gamma_s: V) -> FyLoad {
     let (p, s) = (k.p, k.s);
     let c = &p.pure_fy;
     let pr = &p.pressure;
     let fz = x.fz;
-    let kya = kya(k, dpi, fz, gamma_s);
+    let kya = kya(k, gd, dpi, fz, gamma_s);
     let svyg = fz * (c.pvy4 * dfz + c.pvy3) * gamma_s * s.lkyc * s.lmuy;
     let kyg0 = fz * (c.pky7 * dfz + c.pky6) * (1.0 + pr.ppy5 * dpi) * s.lkyc;
     let kya_p = kya + EPS * sgn1(kya);
@@ -330,13 +329,13 @@ fn fy_load(k: &Kernel<'_>, x: &Prepared, dfz: V, dpi: V, gamma_s: V) -> FyLoad {
 }
 
 #[inline(always)]
-fn fy_kernel(k: &Kernel<'_>, f: &FyLoad, alpha_s: V, vcx: V) -> V {
+fn fy_kernel<const F: bool>(k: &Kernel<'_>, gd: &Guard<F>, f: &FyLoad, alpha_s: V, vcx: V) -> V {
     let alphay = alpha_s + f.shy;
     let mut ey = f.ey_a * (f.ey_b - f.ey_c * sgn(alphay));
     if k.limits {
         ey = sel(ey.gt(1.0), 1.0, ey);
     }
-    let fy0 = f.dy * lanes::sin(f.cy * lanes::atan(mf_arg(f.by, alphay, ey))) + f.svy;
+    let fy0 = f.dy * gd.sin(f.cy * gd.atan(mf_arg(gd, f.by, alphay, ey))) + f.svy;
     if k.star { sel(vcx.lt(0.0), -fy0, fy0) } else { fy0 }
 }
 
@@ -395,7 +394,7 @@ fn same_load(x: &Prepared, lt: &LoadTerms) -> bool {
 }
 
 #[inline(always)]
-fn load_terms(k: &Kernel<'_>, x: &Prepared) -> LoadTerms {
+fn load_terms<const F: bool>(k: &Kernel<'_>, gd: &Guard<F>, x: &Prepared) -> LoadTerms {
     let (p, s) = (k.p, k.s);
     let fz0 = k.fz0;
     let fz0p = k.fz0p;
@@ -403,16 +402,16 @@ fn load_terms(k: &Kernel<'_>, x: &Prepared) -> LoadTerms {
     let dfz = (fz - fz0p) / fz0p;
     let nompres = k.nompres;
     let dpi = (x.press - nompres) / nompres;
-    let gamma_s = if k.star { lanes::sin(x.gamma) } else { x.gamma };
+    let gamma_s = if k.star { gd.sin(x.gamma) } else { x.gamma };
     let g = x.gamma;
     let r0 = k.r0;
 
-    let fxl = fx_load(k, x, dfz, dpi);
+    let fxl = fx_load(k, gd, x, dfz, dpi);
     let pr = &p.pressure;
 
-    let fy = fy_load(k, x, dfz, dpi, gamma_s);
+    let fy = fy_load(k, gd, x, dfz, dpi, gamma_s);
     let gamma_s_zero = gamma_s.eq(0.0).all();
-    let fy_g0 = if gamma_s_zero { fy } else { fy_load(k, x, dfz, dpi, V::splat(0.0)) };
+    let fy_g0 = if gamma_s_zero { fy } else { fy_load(k, gd, x, dfz, dpi, V::splat(0.0)) };
 
     let cb = &p.combined;
     let mut exa = cb.rex2 * dfz + cb.rex1;
@@ -453,9 +452,9 @@ fn load_terms(k: &Kernel<'_>, x: &Prepared) -> LoadTerms {
     let fzr_mx = fz_mx / fz0;
     let mx_fz_lmx = r0 * fz_mx * s.lmx;
     let mx_const = mx_fz_lmx
-        * (qx.qsx1 * s.lvmx - qx.qsx2 * g * (1.0 + pr.ppmx1 * dpi) + qx.qsx10 * lanes::atan(qx.qsx11 * fzr_mx) * g)
+        * (qx.qsx1 * s.lvmx - qx.qsx2 * g * (1.0 + pr.ppmx1 * dpi) + qx.qsx10 * gd.atan(qx.qsx11 * fzr_mx) * g)
         - r0 * s.lmx * fz_mx * qx.qsx12 * g * g.abs();
-    let mx_q4 = qx.qsx4 * lanes::cos(qx.qsx5 * lanes::atan((qx.qsx6 * fzr_mx) * (qx.qsx6 * fzr_mx)));
+    let mx_q4 = qx.qsx4 * gd.cos(qx.qsx5 * gd.atan((qx.qsx6 * fzr_mx) * (qx.qsx6 * fzr_mx)));
     let mx_fy_lin = r0 * s.lmx * (qx.qsx14 * g.abs() + qx.qsx13);
 
     let qy = &p.rolling;
@@ -466,7 +465,7 @@ fn load_terms(k: &Kernel<'_>, x: &Prepared) -> LoadTerms {
     // (Fz/Fz0)^QSY7·(p/p0)^QSY8 = exp(QSY7·ln + QSY8·ln) where both ratios are positive (every
     // lane in practice); the other lanes take the scalar function's powf branch.
     let pos = fzr_my.gt(0.0) & p_r.gt(0.0);
-    let mut lpf = lanes::exp(qy.qsy7 * lanes::ln(sel(pos, fzr_my, 1.0)) + qy.qsy8 * lanes::ln(sel(pos, p_r, 1.0)));
+    let mut lpf = gd.exp(qy.qsy7 * gd.ln(sel(pos, fzr_my, 1.0)) + qy.qsy8 * gd.ln(sel(pos, p_r, 1.0)));
     if !pos.all() {
         for i in 0..L {
             if !pos.0[i] {
@@ -480,7 +479,7 @@ fn load_terms(k: &Kernel<'_>, x: &Prepared) -> LoadTerms {
     let v = &p.vertical;
     let cz_p = v.vertical_stiffness * (1.0 + v.pfz1 * dpi);
     let ufz_r = x.u_fz / fz0;
-    let deflection_term = (fz0 / cz_p) * (v.dreff * lanes::atan(v.breff * ufz_r) + v.freff * ufz_r);
+    let deflection_term = (fz0 / cz_p) * (v.dreff * gd.atan(v.breff * ufz_r) + v.freff * ufz_r);
     let ext_scale = (1.0 + v.pfz1 * dpi) * fz0;
 
     let cp = &p.contact_patch;
@@ -488,7 +487,7 @@ fn load_terms(k: &Kernel<'_>, x: &Prepared) -> LoadTerms {
     let fz_cp = sel((r0 - x.u_fz / cz_p).lt(rim), (r0 - rim) * cz_p, x.u_fz);
     let n = (fz_cp / (cz_p * r0)).max(0.0);
     let a_m = r0 * (cp.q_ra2 * n + cp.q_ra1 * n.sqrt());
-    let b_m = p.dimension.width * (cp.q_rb2 * n + cp.q_rb1 * lanes::cbrt(n));
+    let b_m = p.dimension.width * (cp.q_rb2 * n + cp.q_rb1 * gd.cbrt(n));
 
     let st = &p.structural;
     let cx_carcass = st.longitudinal_stiffness * (1.0 + st.pcfx1 * dfz + st.pcfx2 * dfz * dfz) * (1.0 + st.pcfx3 * dpi);
@@ -535,7 +534,7 @@ fn load_terms(k: &Kernel<'_>, x: &Prepared) -> LoadTerms {
 }
 
 #[inline(always)]
-fn my(k: &Kernel<'_>, lt: &LoadTerms, vcx: V, input_kappa: V, fx: V) -> V {
+fn my<const F: bool>(k: &Kernel<'_>, gd: &Guard<F>, lt: &LoadTerms, vcx: V, input_kappa: V, fx: V) -> V {
     let p = k.p;
     let q = &p.rolling;
     let vr = vcx / p.model.longvl;
@@ -548,7 +547,7 @@ fn my(k: &Kernel<'_>, lt: &LoadTerms, vcx: V, input_kappa: V, fx: V) -> V {
     let blend = input_kappa.ge(low) & input_kappa.le(high);
     if blend.any() {
         let red = (FRAC_PI_2 * (input_kappa + 1.0)) / (high + 1.0);
-        m = sel(blend, m * lanes::sin(red), m);
+        m = sel(blend, m * gd.sin(red), m);
     }
     m = sel(input_kappa.lt(low), -m, m);
     sel(vcx.eq(0.0), 0.0, m)
@@ -601,28 +600,91 @@ fn deflection(k: &Kernel<'_>, x: &Prepared, lt: &LoadTerms, omega: V, r_omega: V
 }
 
 /// The full evaluation of one chunk. `cache` holds the load-case terms of the previous chunk
-/// and is reused when every lane has the same load case (sweeps).
+/// and is reused when every lane has the same load case (sweeps). A chunk in which some lane
+/// left the lane functions' fast ranges (huge or non-finite arguments) is evaluated by the
+/// scalar model instead.
 #[inline(always)]
-pub(crate) fn eval_chunk(k: &Kernel<'_>, input: &Inputs, cache: &mut Option<LoadTerms>) -> Outputs {
-    let x = prepare(k, input);
+pub(crate) fn eval_chunk<const F: bool>(k: &Kernel<'_>, input: &Inputs, cache: &mut Option<LoadTerms>) -> Outputs {
+    let gd = Guard::<F>::default();
+    let x = prepare(k, &gd, input);
     let lt = match cache {
         Some(lt) if same_load(&x, lt) => lt,
-        _ => cache.insert(load_terms(k, &x)),
+        _ => cache.insert(load_terms(k, &gd, &x)),
     };
-    eval_points(k, input, &x, lt)
+    let out = eval_points(k, &gd, input, &x, lt);
+    if gd.any() {
+        *cache = None;
+        return scalar_chunk(k, input);
+    }
+    out
+}
+
+/// The scalar reference model, lane by lane.
+#[cold]
+#[inline(never)]
+fn scalar_chunk(k: &Kernel<'_>, input: &Inputs) -> Outputs {
+    let o: [MfOutput; L] = std::array::from_fn(|i| {
+        let x = MfInput {
+            fz_n: input.fz.0[i],
+            kappa: input.kappa.0[i],
+            alpha_rad: input.alpha.0[i],
+            gamma_rad: input.gamma.0[i],
+            phit_per_m: input.phit.0[i],
+            vx_mps: input.vx.0[i],
+            p_pa: input.p.0[i],
+            omega_radps: input.omega.0[i],
+        };
+        evaluate_scaled(k.p, k.s, k.mode, &x)
+    });
+    macro_rules! lanes_of {
+        ($($f:ident),*) => {
+            Outputs { $( $f: V(std::array::from_fn(|i| o[i].$f)), )* clamped: std::array::from_fn(|i| o[i].clamped) }
+        };
+    }
+    lanes_of!(
+        fx_n,
+        fy_n,
+        fz_n,
+        mx_nm,
+        my_nm,
+        mz_nm,
+        kappa,
+        alpha_rad,
+        gamma_rad,
+        phit_per_m,
+        vx_mps,
+        p_pa,
+        re_m,
+        rho_m,
+        contact_length_m,
+        trail_m,
+        mux,
+        muy,
+        omega_radps,
+        rl_m,
+        contact_width_m,
+        mzr_nm,
+        cx_npm,
+        cy_npm,
+        cz_npm,
+        kya_nprad,
+        sigmax_m,
+        sigmay_m,
+        kxk_n
+    )
 }
 
 #[inline(always)]
-fn eval_points(k: &Kernel<'_>, input: &Inputs, x: &Prepared, lt: &LoadTerms) -> Outputs {
+fn eval_points<const F: bool>(k: &Kernel<'_>, gd: &Guard<F>, input: &Inputs, x: &Prepared, lt: &LoadTerms) -> Outputs {
     let p = k.p;
     let s = k.s;
     let vcx = x.vcx;
     let kappa = x.kappa;
-    let (sin_alpha, cos_alpha) = lanes::sin_cos(x.alpha);
+    let (sin_alpha, cos_alpha) = gd.sin_cos(x.alpha);
     let tan_alpha = sin_alpha / cos_alpha;
     let (alpha_s, cos_alpha_s) = if k.star {
         let a = tan_alpha * sgn1(vcx);
-        (a, lanes::cos(a))
+        (a, gd.cos(a))
     } else {
         (x.alpha, cos_alpha)
     };
@@ -630,14 +692,14 @@ fn eval_points(k: &Kernel<'_>, input: &Inputs, x: &Prepared, lt: &LoadTerms) -> 
     let vc = (vcx * vcx + vsy * vsy).sqrt();
     let cos_alpha_p = (vcx / (vc + EPS)).clamp(-1.0, 1.0);
 
-    let fx0 = fx_kernel(k, &lt.fx, kappa, vcx);
-    let fy0 = fy_kernel(k, &lt.fy, alpha_s, vcx);
+    let fx0 = fx_kernel(k, gd, &lt.fx, kappa, vcx);
+    let fy0 = fy_kernel(k, gd, &lt.fy, alpha_s, vcx);
     let fy0_g0 =
-        if lt.gamma_s_zero { fy0 } else { sel(lt.gamma_s.eq(0.0), fy0, fy_kernel(k, &lt.fy_g0, alpha_s, vcx)) };
+        if lt.gamma_s_zero { fy0 } else { sel(lt.gamma_s.eq(0.0), fy0, fy_kernel(k, gd, &lt.fy_g0, alpha_s, vcx)) };
 
     let alphar = alpha_s + lt.shf;
     let alphat = alpha_s + lt.sht;
-    let mut et = lt.et_a * (1.0 + lt.et_b * FRAC_2_PI * lanes::atan(lt.bt * lt.ct * alphat));
+    let mut et = lt.et_a * (1.0 + lt.et_b * FRAC_2_PI * gd.atan(lt.bt * lt.ct * alphat));
     if k.limits {
         et = sel(et.gt(1.0), 1.0, et);
     }
@@ -651,8 +713,8 @@ fn eval_points(k: &Kernel<'_>, input: &Inputs, x: &Prepared, lt: &LoadTerms) -> 
         } else {
             let bxa = lt.bxa_a * cos_atan(cb.rbx2 * kappa);
             let shxa = V::splat(cb.rhx1);
-            let g0 = lanes::cos(cb.rcx1 * lanes::atan(mf_arg(bxa, shxa, lt.exa)));
-            let g = lanes::cos(cb.rcx1 * lanes::atan(mf_arg(bxa, alpha_s + shxa, lt.exa))) / g0;
+            let g0 = gd.cos(cb.rcx1 * gd.atan(mf_arg(gd, bxa, shxa, lt.exa)));
+            let g = gd.cos(cb.rcx1 * gd.atan(mf_arg(gd, bxa, alpha_s + shxa, lt.exa))) / g0;
             sel(alpha_zero, 1.0, g)
         };
         let kappa_zero = kappa.eq(0.0);
@@ -661,9 +723,9 @@ fn eval_points(k: &Kernel<'_>, input: &Inputs, x: &Prepared, lt: &LoadTerms) -> 
             (V::splat(1.0), V::splat(0.0))
         } else {
             let byk = lt.byk_a * cos_atan(cb.rby2 * (alpha_s - cb.rby3));
-            let g0 = lanes::cos(cb.rcy1 * lanes::atan(mf_arg(byk, lt.shyk, lt.eyk)));
-            let g = lanes::cos(cb.rcy1 * lanes::atan(mf_arg(byk, kappa + lt.shyk, lt.eyk))) / g0;
-            let svyk = lt.dvyk_a * cos_atan(cb.rvy4 * alpha_s) * lanes::sin(cb.rvy5 * lanes::atan(cb.rvy6 * kappa));
+            let g0 = gd.cos(cb.rcy1 * gd.atan(mf_arg(gd, byk, lt.shyk, lt.eyk)));
+            let g = gd.cos(cb.rcy1 * gd.atan(mf_arg(gd, byk, kappa + lt.shyk, lt.eyk))) / g0;
+            let svyk = lt.dvyk_a * cos_atan(cb.rvy4 * alpha_s) * gd.sin(cb.rvy5 * gd.atan(cb.rvy6 * kappa));
             (sel(kappa_zero, 1.0, g), sel(kappa_zero, 0.0, svyk))
         };
         let fx = gx * fx0;
@@ -673,25 +735,25 @@ fn eval_points(k: &Kernel<'_>, input: &Inputs, x: &Prepared, lt: &LoadTerms) -> 
         } else {
             let k_ratio = lt.fx.kxk / lt.kya_p * kappa;
             let k2 = k_ratio * k_ratio;
-            let (sr, cr) = lanes::sin_cos(alphar);
-            let (st, ct) = lanes::sin_cos(alphat);
+            let (sr, cr) = gd.sin_cos(alphar);
+            let (st, ct) = gd.sin_cos(alphat);
             let tr = sr / cr;
             let tt = st / ct;
-            let ar = lanes::atan((tr * tr + k2).sqrt()) * sgn(alphar);
-            let at = lanes::atan((tt * tt + k2).sqrt()) * sgn(alphat);
+            let ar = gd.atan((tr * tr + k2).sqrt()) * sgn(alphar);
+            let at = gd.atan((tt * tt + k2).sqrt()) * sgn(alphat);
             (sel(kappa_zero, alphar, ar), sel(kappa_zero, alphat, at))
         };
         let s_arm = lt.s_a + lt.s_fy * fy;
         let mzr = dr * cos_atan(lt.br * alphar_eq) * x.reduction_smooth;
         let t = lt.dt
-            * lanes::cos(lt.ct * lanes::atan(mf_arg(lt.bt, alphat_eq, et)))
+            * gd.cos(lt.ct * gd.atan(mf_arg(gd, lt.bt, alphat_eq, et)))
             * cos_alpha_p
             * s.lfzo
             * x.reduction_smooth;
         let mz = -t * (gy * fy0_g0) + mzr + s_arm * fx;
         (fx, fy, mz, t, mzr)
     } else {
-        let t0 = lt.dt * lanes::cos(lt.ct * lanes::atan(mf_arg(lt.bt, alphat, et))) * cos_alpha_p * x.reduction_smooth;
+        let t0 = lt.dt * gd.cos(lt.ct * gd.atan(mf_arg(gd, lt.bt, alphat, et))) * cos_alpha_p * x.reduction_smooth;
         let mzr0 = dr * cos_atan(lt.br * alphar) * cos_alpha_p * x.reduction_smooth;
         (fx0, fy0, -t0 * fy0_g0 + mzr0, t0, mzr0)
     };
@@ -700,9 +762,9 @@ fn eval_points(k: &Kernel<'_>, input: &Inputs, x: &Prepared, lt: &LoadTerms) -> 
     let fy_r = fy / k.fz0;
     let g = x.gamma;
     let mx_nm = lt.mx_const
-        + lt.mx_fz_lmx * (qx.qsx3 * fy_r + lt.mx_q4 * lanes::sin(qx.qsx7 * g + qx.qsx8 * lanes::atan(qx.qsx9 * fy_r)))
+        + lt.mx_fz_lmx * (qx.qsx3 * fy_r + lt.mx_q4 * gd.sin(qx.qsx7 * g + qx.qsx8 * gd.atan(qx.qsx9 * fy_r)))
         + lt.mx_fy_lin * fy;
-    let my_nm = my(k, lt, vcx, input.kappa, fx);
+    let my_nm = my(k, gd, lt, vcx, input.kappa, fx);
 
     let (re, r_omega, omega) = rolling_radius(k, lt, vcx, input);
     let (rho, rl, cz) = deflection(k, x, lt, omega, r_omega, fx, fy);
@@ -741,19 +803,43 @@ fn eval_points(k: &Kernel<'_>, input: &Inputs, x: &Prepared, lt: &LoadTerms) -> 
     }
 }
 
-/// Pure lateral force of one chunk (`pure_fy` of model.rs).
+/// Pure lateral force of one chunk (`pure_fy` of model.rs); as [`eval_chunk`], a chunk that
+/// leaves the fast ranges is redone by the scalar function.
 #[inline(always)]
-pub(crate) fn pure_fy_chunk(k: &Kernel<'_>, input: &Inputs) -> V {
-    let x = prepare(k, input);
+pub(crate) fn pure_fy_chunk<const F: bool>(k: &Kernel<'_>, input: &Inputs) -> V {
+    let gd = Guard::<F>::default();
+    let x = prepare(k, &gd, input);
     let fz0p = k.fz0p;
     let dfz = (x.fz - fz0p) / fz0p;
     let dpi = (x.press - k.nompres) / k.nompres;
     let (alpha_s, gamma_s) = if k.star {
-        let (sin_alpha, cos_alpha) = lanes::sin_cos(x.alpha);
-        (sin_alpha / cos_alpha * sgn1(x.vcx), lanes::sin(x.gamma))
+        let (sin_alpha, cos_alpha) = gd.sin_cos(x.alpha);
+        (sin_alpha / cos_alpha * sgn1(x.vcx), gd.sin(x.gamma))
     } else {
         (x.alpha, x.gamma)
     };
-    let f = fy_load(k, &x, dfz, dpi, gamma_s);
-    fy_kernel(k, &f, alpha_s, x.vcx)
+    let f = fy_load(k, &gd, &x, dfz, dpi, gamma_s);
+    let fy = fy_kernel(k, &gd, &f, alpha_s, x.vcx);
+    if gd.any() {
+        return scalar_pure_fy(k, input);
+    }
+    fy
+}
+
+#[cold]
+#[inline(never)]
+fn scalar_pure_fy(k: &Kernel<'_>, input: &Inputs) -> V {
+    V(std::array::from_fn(|i| {
+        let x = MfInput {
+            fz_n: input.fz.0[i],
+            kappa: input.kappa.0[i],
+            alpha_rad: input.alpha.0[i],
+            gamma_rad: input.gamma.0[i],
+            phit_per_m: input.phit.0[i],
+            vx_mps: input.vx.0[i],
+            p_pa: input.p.0[i],
+            omega_radps: input.omega.0[i],
+        };
+        pure_fy(k.p, k.mode, &x)
+    }))
 }

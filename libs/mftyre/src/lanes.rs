@@ -200,33 +200,30 @@ impl Neg for V {
     }
 }
 
-/// Horner's rule, coefficients lowest degree first.
+/// Polynomial with coefficients lowest degree first, by Estrin's scheme: pairs c₂ᵢ + c₂ᵢ₊₁·x,
+/// then pairs of those with x², x⁴, … The dependency chain is log₂ N steps long instead of N
+/// (Horner), which matters more here than the operation count: the kernel is latency-bound.
 #[inline(always)]
-fn poly<const N: usize>(x: V, c: &[f64; N]) -> V {
-    let mut acc = V::splat(c[N - 1]);
-    for k in (0..N - 1).rev() {
-        acc = acc * x + c[k];
-    }
-    acc
-}
-
-/// Lanes where `ok` is false are recomputed with the scalar `f`.
-#[inline(always)]
-fn patch(mut r: V, x: V, ok: M, f: impl Fn(f64) -> f64) -> V {
-    if !ok.all() {
-        patch_cold(&mut r, x, ok, &f);
-    }
-    r
-}
-
-#[cold]
-#[inline(never)]
-fn patch_cold(r: &mut V, x: V, ok: M, f: &dyn Fn(f64) -> f64) {
-    for i in 0..L {
-        if !ok.0[i] {
-            r.0[i] = f(x.0[i]);
+fn poly<const F: bool, const N: usize>(x: V, c: &[f64; N]) -> V {
+    let mut t: [V; N] = std::array::from_fn(|i| V::splat(c[i]));
+    let mut n = N;
+    let mut p = x;
+    while n > 1 {
+        let m = n.div_ceil(2);
+        for i in 0..m {
+            t[i] = if 2 * i + 1 < n { mla::<F>(t[2 * i + 1], p, t[2 * i]) } else { t[2 * i] };
         }
+        n = m;
+        p = p * p;
     }
+    t[0]
+}
+
+/// a·b + c: fused (one rounding) when `F`, the build having FMA; otherwise multiply then add.
+#[inline(always)]
+fn mla<const F: bool>(a: V, b: impl Into<V>, c: impl Into<V>) -> V {
+    let (b, c) = (b.into(), c.into());
+    if F { vf(|i| a.0[i].mul_add(b.0[i], c.0[i])) } else { a * b + c }
 }
 
 /// Adding then subtracting 1.5·2⁵² rounds to the nearest integer (|x| < 2⁵¹) and leaves the
@@ -259,7 +256,7 @@ const ATAN_P: [f64; 11] = [
 /// atan per lane. |x| is reduced to |y| ≤ tan(π/8) by atan x = π/4 + atan((x−1)/(x+1)) or
 /// π/2 + atan(−1/x); one division serves all three ranges.
 #[inline(always)]
-pub(crate) fn atan(x: V) -> V {
+pub(crate) fn atan<const F: bool>(x: V) -> V {
     let a = x.abs();
     let big = a.gt(TAN_3PI_8);
     let mid = a.gt(TAN_PI_8);
@@ -269,7 +266,7 @@ pub(crate) fn atan(x: V) -> V {
     let base = sel(big, PIO2_HI, sel(mid, PIO4_HI, 0.0));
     let base_lo = sel(big, PIO2_LO, sel(mid, PIO4_LO, 0.0));
     let z = y * y;
-    let r = base + (y + (y * z * poly(z, &ATAN_P) + base_lo));
+    let r = base + (y + mla::<F>(y * z, poly::<F, 11>(z, &ATAN_P), base_lo));
     r.copysign(x)
 }
 
@@ -305,35 +302,23 @@ fn flip(v: V, q: [u64; L]) -> V {
     vf(|i| f64::from_bits(v.0[i].to_bits() ^ ((q[i] & 2) << 62)))
 }
 
-/// (sin x, cos x) per lane: x = k·π/2 + r, |r| ≤ π/4, then the quadrant k mod 4 picks and signs.
+/// (sin x, cos x) per lane: x = k·π/2 + r, |r| ≤ π/4, then the quadrant k mod 4 picks and
+/// signs; also says which lanes were in the fast path's range (|x| ≤ 1e5).
 #[inline(always)]
-pub(crate) fn sin_cos(x: V) -> (V, V) {
+fn sin_cos_raw<const F: bool>(x: V) -> (V, V, M) {
     let t = x * std::f64::consts::FRAC_2_PI + SHIFTER;
     let k = t - SHIFTER;
     let q: [u64; L] = std::array::from_fn(|i| t.0[i].to_bits());
-    let r = ((x - k * PIO2_1) - k * PIO2_2) - k * PIO2_3;
+    let r = mla::<F>(-k, PIO2_3, mla::<F>(-k, PIO2_2, mla::<F>(-k, PIO2_1, x)));
     let z = r * r;
     // sin(−0) = −0: the polynomial term would add +0.
-    let s = sel(z.eq(0.0), r, r + r * z * poly(z, &SIN_S));
-    let c = 1.0 - (0.5 * z - z * z * poly(z, &COS_C));
+    let s = sel(z.eq(0.0), r, mla::<F>(r * z, poly::<F, 6>(z, &SIN_S), r));
+    let c = 1.0 - mla::<F>(-(z * z), poly::<F, 6>(z, &COS_C), 0.5 * z);
     let odd = M(std::array::from_fn(|i| q[i] & 1 != 0));
     let sin = flip(sel(odd, c, s), q);
     let q1: [u64; L] = std::array::from_fn(|i| q[i].wrapping_add(1));
     let cos = flip(sel(odd, s, c), q1);
-    let ok = x.abs().le(TRIG_MAX);
-    (patch(sin, x, ok, f64::sin), patch(cos, x, ok, f64::cos))
-}
-
-/// sin per lane.
-#[inline(always)]
-pub(crate) fn sin(x: V) -> V {
-    sin_cos(x).0
-}
-
-/// cos per lane.
-#[inline(always)]
-pub(crate) fn cos(x: V) -> V {
-    sin_cos(x).1
+    (sin, cos, x.abs().le(TRIG_MAX))
 }
 
 /// ln 2 with 32 significant bits (k·LN2_HI exact for |k| < 2²¹) and the remainder.
@@ -356,15 +341,14 @@ const EXP_E: [f64; 11] = [
 
 /// exp per lane: x = k·ln2 + r, |r| ≤ ln2/2, eˣ = 2ᵏ·eʳ (fast path for |x| ≤ 708).
 #[inline(always)]
-pub(crate) fn exp(x: V) -> V {
+fn exp_raw<const F: bool>(x: V) -> (V, M) {
     let t = x * std::f64::consts::LOG2_E + SHIFTER;
     let k = t - SHIFTER;
-    let r = (x - k * LN2_HI) - k * LN2_LO;
-    let e = 1.0 + (r + r * r * poly(r, &EXP_E));
+    let r = mla::<F>(-k, LN2_LO, mla::<F>(-k, LN2_HI, x));
+    let e = 1.0 + mla::<F>(r * r, poly::<F, 11>(r, &EXP_E), r);
     // 2^k built from its bits: k sits in the low bits of t (two's complement for k < 0).
     let scale = vf(|i| f64::from_bits((t.0[i].to_bits().wrapping_add(1023) & 0x7ff) << 52));
-    let ok = x.abs().le(708.0);
-    patch(e * scale, x, ok, f64::exp)
+    (e * scale, x.abs().le(708.0))
 }
 
 /// 2·atanh(√w)/√w − 2)/w on w ∈ [0, ((√2−1)/(√2+1))²], degree 7; fit error 2.1e-18.
@@ -382,7 +366,7 @@ const LN_L: [f64; 8] = [
 /// Natural logarithm per lane: x = 2ᵉ·m with m ∈ [√½, √2), ln m = 2·atanh s, s = (m−1)/(m+1).
 /// Fast path for positive normal finite x.
 #[inline(always)]
-pub(crate) fn ln(x: V) -> V {
+fn ln_raw<const F: bool>(x: V) -> (V, M) {
     const MANT: u64 = (1 << 52) - 1;
     let m1 = vf(|i| f64::from_bits((x.0[i].to_bits() & MANT) | 0x3ff0_0000_0000_0000));
     // The biased exponent as a double without an integer conversion: 2⁵² + e_b − (2⁵² + 1023).
@@ -392,26 +376,125 @@ pub(crate) fn ln(x: V) -> V {
     let e = sel(hi, e1 + 1.0, e1);
     let s = (m - 1.0) / (m + 1.0);
     let w = s * s;
-    let lnm = 2.0 * s + s * w * poly(w, &LN_L);
-    let r = e * LN2_HI + (lnm + e * LN2_LO);
-    let ok = x.ge(f64::MIN_POSITIVE) & x.lt(f64::INFINITY);
-    patch(r, x, ok, f64::ln)
+    let lnm = mla::<F>(s * w, poly::<F, 8>(w, &LN_L), 2.0 * s);
+    let r = mla::<F>(e, LN2_HI, mla::<F>(e, LN2_LO, lnm));
+    (r, x.ge(f64::MIN_POSITIVE) & x.lt(f64::INFINITY))
 }
 
-/// Cube root per lane: exp(ln|x|/3) polished by one Newton step, sign restored; 0 → 0.
+/// Cube root per lane: exp(ln|x|/3) polished by one Newton step, sign restored (fast path
+/// for normal finite x; 0 is not in it).
 #[inline(always)]
-pub(crate) fn cbrt(x: V) -> V {
+fn cbrt_raw<const F: bool>(x: V) -> (V, M) {
     let a = x.abs();
     let ok = a.ge(f64::MIN_POSITIVE) & a.lt(f64::INFINITY);
     let a1 = sel(ok, a, 1.0);
-    let y = exp(ln(a1) * (1.0 / 3.0));
+    // ln and exp cannot leave their ranges here (a1 is normal, ln a1/3 ≤ 237).
+    let y = exp_raw::<F>(ln_raw::<F>(a1).0 * (1.0 / 3.0)).0;
     let y = y - (y - a1 / (y * y)) * (1.0 / 3.0);
-    patch(y.copysign(x), x, ok, f64::cbrt)
+    (y.copysign(x), ok)
+}
+
+/// Collects which lanes of a chunk left the fast paths' ranges, so that the kernel can run
+/// branch-free and redo the (rare) chunks that need it with the scalar model.
+#[derive(Debug, Default)]
+/// `F`: the build has FMA (see [`mla`]).
+pub(crate) struct Guard<const F: bool>(std::cell::Cell<[bool; L]>);
+
+impl<const F: bool> Guard<F> {
+    #[inline(always)]
+    fn note(&self, ok: M) {
+        let b = self.0.get();
+        self.0.set(std::array::from_fn(|i| b[i] | !ok.0[i]));
+    }
+
+    /// atan (no range limits).
+    #[inline(always)]
+    pub(crate) fn atan(&self, x: V) -> V {
+        atan::<F>(x)
+    }
+
+    /// True when some lane needs the slow path.
+    #[inline(always)]
+    pub(crate) fn any(&self) -> bool {
+        M(self.0.get()).any()
+    }
+
+    #[inline(always)]
+    pub(crate) fn sin_cos(&self, x: V) -> (V, V) {
+        let (s, c, ok) = sin_cos_raw::<F>(x);
+        self.note(ok);
+        (s, c)
+    }
+
+    #[inline(always)]
+    pub(crate) fn sin(&self, x: V) -> V {
+        self.sin_cos(x).0
+    }
+
+    #[inline(always)]
+    pub(crate) fn cos(&self, x: V) -> V {
+        self.sin_cos(x).1
+    }
+
+    #[inline(always)]
+    pub(crate) fn exp(&self, x: V) -> V {
+        let (r, ok) = exp_raw::<F>(x);
+        self.note(ok);
+        r
+    }
+
+    #[inline(always)]
+    pub(crate) fn ln(&self, x: V) -> V {
+        let (r, ok) = ln_raw::<F>(x);
+        self.note(ok);
+        r
+    }
+
+    #[inline(always)]
+    pub(crate) fn cbrt(&self, x: V) -> V {
+        let (r, ok) = cbrt_raw::<F>(x);
+        self.note(ok);
+        r
+    }
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// Lanes where `ok` is false recomputed with std, as the kernel's chunk fallback does.
+    fn patch(mut r: V, x: V, ok: M, f: impl Fn(f64) -> f64) -> V {
+        for i in 0..L {
+            if !ok.0[i] {
+                r.0[i] = f(x.0[i]);
+            }
+        }
+        r
+    }
+
+    // The functions under test, without (F = false) and with (F = true) fused multiply-add.
+    fn sin_cos_f<const F: bool>(x: V) -> (V, V) {
+        let (s, c, ok) = sin_cos_raw::<F>(x);
+        (patch(s, x, ok, f64::sin), patch(c, x, ok, f64::cos))
+    }
+    fn sin_f<const F: bool>(x: V) -> V {
+        sin_cos_f::<F>(x).0
+    }
+    fn cos_f<const F: bool>(x: V) -> V {
+        sin_cos_f::<F>(x).1
+    }
+    fn exp_f<const F: bool>(x: V) -> V {
+        let (r, ok) = exp_raw::<F>(x);
+        patch(r, x, ok, f64::exp)
+    }
+    fn ln_f<const F: bool>(x: V) -> V {
+        let (r, ok) = ln_raw::<F>(x);
+        patch(r, x, ok, f64::ln)
+    }
+    fn cbrt_f<const F: bool>(x: V) -> V {
+        let (r, ok) = cbrt_raw::<F>(x);
+        patch(r, x, ok, f64::cbrt)
+    }
 
     /// Distance in units in the last place (same-sign finite values).
     fn ulps(a: f64, b: f64) -> u64 {
@@ -458,52 +541,67 @@ mod tests {
         }
     }
 
-    #[test]
-    fn atan_within_2_ulp() {
+    fn atan_checks<const F: bool>() {
         check(
             "atan",
-            atan,
+            atan::<F>,
             f64::atan,
             &[(-3.0, 3.0, false), (-0.5, 0.5, false), (1e-300, 1e300, true), (-50.0, -1e-8, false)],
         );
         let specials = [0.0, -0.0, 1.0, -1.0, TAN_PI_8, TAN_3PI_8, f64::INFINITY, f64::NEG_INFINITY, 1e-310];
         for x in specials {
-            let v = atan(V::splat(x)).0[0];
+            let v = atan::<F>(V::splat(x)).0[0];
             assert!(ulps(v, x.atan()) <= 1, "atan({x}) = {v}");
         }
-        assert!(atan(V::splat(f64::NAN)).0[0].is_nan());
+        assert!(atan::<F>(V::splat(f64::NAN)).0[0].is_nan());
     }
 
-    #[test]
-    fn sin_cos_within_2_ulp() {
+    fn sin_cos_checks<const F: bool>() {
         let ranges = [(-4.0, 4.0, false), (-0.8, 0.8, false), (-1e5, 1e5, false), (1e-300, 1e-3, true)];
-        check("sin", sin, f64::sin, &ranges[..2]);
-        check("cos", cos, f64::cos, &ranges[..3]);
-        check("sin tiny", sin, f64::sin, &ranges[3..]);
+        check("sin", sin_f::<F>, f64::sin, &ranges[..2]);
+        check("cos", cos_f::<F>, f64::cos, &ranges[..3]);
+        check("sin tiny", sin_f::<F>, f64::sin, &ranges[3..]);
         // Near multiples of π the result is tiny: compare absolutely there (≤ 3 ulp of 1; the
         // reduction of large arguments adds up to an ulp of the reduced angle).
         for x in xs(-1e5, 1e5, 200_000, false) {
-            let (s, c) = sin_cos(V::splat(x));
+            let (s, c) = sin_cos_f::<F>(V::splat(x));
             assert!((s.0[0] - x.sin()).abs() <= 3.5e-16, "sin({x})");
             assert!((c.0[0] - x.cos()).abs() <= 3.5e-16, "cos({x})");
         }
         for x in [1e6, -3e10, 1e300, f64::INFINITY, f64::NAN, 0.0, -0.0] {
-            let (s, c) = sin_cos(V::splat(x));
+            let (s, c) = sin_cos_f::<F>(V::splat(x));
             assert_eq!(s.0[0].to_bits(), x.sin().to_bits(), "sin({x})");
             assert_eq!(c.0[0].to_bits(), x.cos().to_bits(), "cos({x})");
         }
     }
 
-    #[test]
-    fn exp_ln_cbrt_within_2_ulp() {
-        check("exp", exp, f64::exp, &[(-708.0, 708.0, false), (-1.0, 1.0, false), (-1e-10, 1e-10, false)]);
-        check("ln", ln, f64::ln, &[(1e-300, 1e300, true), (0.5, 2.0, false), (0.999, 1.001, false)]);
-        check("cbrt", cbrt, f64::cbrt, &[(1e-300, 1e300, true), (0.0, 1.0, false), (-1e3, -1e-3, false)]);
+    fn exp_ln_cbrt_checks<const F: bool>() {
+        check("exp", exp_f::<F>, f64::exp, &[(-708.0, 708.0, false), (-1.0, 1.0, false), (-1e-10, 1e-10, false)]);
+        check("ln", ln_f::<F>, f64::ln, &[(1e-300, 1e300, true), (0.5, 2.0, false), (0.999, 1.001, false)]);
+        check("cbrt", cbrt_f::<F>, f64::cbrt, &[(1e-300, 1e300, true), (0.0, 1.0, false), (-1e3, -1e-3, false)]);
         for x in [0.0, -0.0, 1e-310, -1.0, 800.0, -800.0, f64::INFINITY, f64::NAN, f64::MAX] {
-            let (e, l, c) = (exp(V::splat(x)).0[0], ln(V::splat(x)).0[0], cbrt(V::splat(x)).0[0]);
+            let (e, l, c) = (exp_f::<F>(V::splat(x)).0[0], ln_f::<F>(V::splat(x)).0[0], cbrt_f::<F>(V::splat(x)).0[0]);
             assert!(ulps(e, x.exp()) <= 1, "exp({x}) = {e}");
             assert!(ulps(l, x.ln()) <= 1, "ln({x}) = {l}");
             assert!(ulps(c, x.cbrt()) <= 1, "cbrt({x}) = {c}");
         }
+    }
+
+    #[test]
+    fn atan_within_2_ulp() {
+        atan_checks::<false>();
+        atan_checks::<true>();
+    }
+
+    #[test]
+    fn sin_cos_within_2_ulp() {
+        sin_cos_checks::<false>();
+        sin_cos_checks::<true>();
+    }
+
+    #[test]
+    fn exp_ln_cbrt_within_2_ulp() {
+        exp_ln_cbrt_checks::<false>();
+        exp_ln_cbrt_checks::<true>();
     }
 }

@@ -168,3 +168,30 @@ fn empty_columns_and_short_batches() {
         compare(&want, &out, 1e-13, 1e-13, "short");
     }
 }
+
+/// Arguments outside the lane functions' fast ranges (huge angles) send their chunk through the
+/// scalar model: those points equal `evaluate` bit for bit. Non-finite inputs give NaN where the
+/// scalar model does, and the rest of the batch is unaffected.
+#[test]
+fn out_of_range_lanes_fall_back_to_the_scalar_model() {
+    let params = sample_tyre();
+    let mut pts = points(64, 3);
+    pts[5].alpha_rad = 3.0e6;
+    pts[17].gamma_rad = -2.0e5;
+    pts[30].vx_mps = f64::NAN;
+    pts[41].kappa = f64::INFINITY;
+    pts[63].fz_n = 1e300;
+    let cols = columns(&pts);
+    let mut out = BatchOutput::default();
+    for mode in [UseMode::M211, UseMode::M221, UseMode::M111] {
+        evaluate_batch(&params, mode, &input_of(&cols), &mut out).expect("lengths");
+        if !mode.limits_check() {
+            for i in [5, 17] {
+                let want = evaluate(&params, mode, &pts[i]);
+                assert_eq!(format!("{:?}", out.get(i).expect("point")), format!("{want:?}"), "{mode} point {i}");
+            }
+        }
+        let want: Vec<MfOutput> = pts.iter().map(|x| evaluate(&params, mode, x)).collect();
+        compare(&want, &out, 1e-13, 1e-13, &mode.to_string());
+    }
+}
