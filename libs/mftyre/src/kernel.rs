@@ -84,6 +84,15 @@ pub(crate) struct Kernel<'a> {
     qv2_r0_v: f64,
     q_fz1: f64,
     fzmin: f64,
+    // Reciprocals of parameter constants: the kernel multiplies where the scalar model divides
+    // (one extra rounding, well inside the 1e-13 agreement; divisions are the slowest lane op).
+    inv_fz0: f64,
+    inv_fz0p: f64,
+    inv_nompres: f64,
+    inv_fzmin: f64,
+    inv_longvl: f64,
+    /// λKy/λμy (Bt).
+    lky_lmuy: f64,
 }
 
 impl<'a> Kernel<'a> {
@@ -106,6 +115,12 @@ impl<'a> Kernel<'a> {
             qv2_r0_v: v.q_v2 * (r0 / p.model.longvl),
             q_fz1: ((v.vertical_stiffness * r0 / fz0).powi(2) - 4.0 * v.q_fz2).max(0.0).sqrt(),
             fzmin: p.limits.fzmin,
+            inv_fz0: 1.0 / fz0,
+            inv_fz0p: 1.0 / (fz0 * s.lfzo),
+            inv_nompres: 1.0 / p.operating.nompres,
+            inv_fzmin: 1.0 / p.limits.fzmin,
+            inv_longvl: 1.0 / p.model.longvl,
+            lky_lmuy: s.lky / s.lmuy,
         }
     }
 }
@@ -291,7 +306,7 @@ fn kya<const F: bool>(k: &Kernel<'_>, gd: &Guard<F>, dpi: V, fz: V, gamma_s: V) 
         * k.fz0p
         * (1.0 + pr.ppy1 * dpi)
         * (1.0 - c.pky3 * gamma_s.abs())
-        * gd.sin(c.pky4 * gd.atan((fz / k.fz0p) / ((c.pky2 + c.pky5 * gamma_s * gamma_s) * (1.0 + pr.ppy2 * dpi))))
+        * gd.sin(c.pky4 * gd.atan((fz * k.inv_fz0p) / ((c.pky2 + c.pky5 * gamma_s * gamma_s) * (1.0 + pr.ppy2 * dpi))))
         * s.lky
 }
 
@@ -399,9 +414,9 @@ fn load_terms<const F: bool>(k: &Kernel<'_>, gd: &Guard<F>, x: &Prepared) -> Loa
     let fz0 = k.fz0;
     let fz0p = k.fz0p;
     let fz = x.fz;
-    let dfz = (fz - fz0p) / fz0p;
+    let dfz = (fz - fz0p) * k.inv_fz0p;
     let nompres = k.nompres;
-    let dpi = (x.press - nompres) / nompres;
+    let dpi = (x.press - nompres) * k.inv_nompres;
     let gamma_s = if k.star { gd.sin(x.gamma) } else { x.gamma };
     let g = x.gamma;
     let r0 = k.r0;
@@ -427,7 +442,7 @@ fn load_terms<const F: bool>(k: &Kernel<'_>, gd: &Guard<F>, x: &Prepared) -> Loa
     let kya_p = fy.kya + EPS * sgn1(fy.kya);
     let shf = fy.shy + fy.svy / kya_p;
     let sht = q.qhz2 * dfz + q.qhz1 + (q.qhz4 * dfz + q.qhz3) * gamma_s;
-    let bt = (q.qbz1 + q.qbz2 * dfz + q.qbz3 * dfz * dfz) * (1.0 + q.qbz4 * g + q.qbz5 * g.abs()) * s.lky / s.lmuy;
+    let bt = (q.qbz1 + q.qbz2 * dfz + q.qbz3 * dfz * dfz) * (1.0 + q.qbz4 * g + q.qbz5 * g.abs()) * k.lky_lmuy;
     let ct = q.qcz1;
     let dt = (q.qdz2 * dfz + q.qdz1)
         * (1.0 - pr.ppz1 * dpi)
@@ -448,8 +463,8 @@ fn load_terms<const F: bool>(k: &Kernel<'_>, gd: &Guard<F>, x: &Prepared) -> Loa
 
     let qx = &p.overturning;
     let fzmin = k.fzmin;
-    let fz_mx = if fzmin > 0.0 { sel(fz.lt(fzmin), fz * ((fz / fzmin) * (fz / fzmin)), fz) } else { fz };
-    let fzr_mx = fz_mx / fz0;
+    let fz_mx = if fzmin > 0.0 { sel(fz.lt(fzmin), fz * ((fz * k.inv_fzmin) * (fz * k.inv_fzmin)), fz) } else { fz };
+    let fzr_mx = fz_mx * k.inv_fz0;
     let mx_fz_lmx = r0 * fz_mx * s.lmx;
     let mx_const = mx_fz_lmx
         * (qx.qsx1 * s.lvmx - qx.qsx2 * g * (1.0 + pr.ppmx1 * dpi) + qx.qsx10 * gd.atan(qx.qsx11 * fzr_mx) * g)
@@ -459,9 +474,9 @@ fn load_terms<const F: bool>(k: &Kernel<'_>, gd: &Guard<F>, x: &Prepared) -> Loa
 
     let qy = &p.rolling;
     let u = x.u_fz;
-    let fz_my = if fzmin > 0.0 { sel(u.lt(fzmin), u * (u / fzmin), u) } else { u };
-    let fzr_my = fz_my / fz0;
-    let p_r = x.press / nompres;
+    let fz_my = if fzmin > 0.0 { sel(u.lt(fzmin), u * (u * k.inv_fzmin), u) } else { u };
+    let fzr_my = fz_my * k.inv_fz0;
+    let p_r = x.press * k.inv_nompres;
     // (Fz/Fz0)^QSY7·(p/p0)^QSY8 = exp(QSY7·ln + QSY8·ln) where both ratios are positive (every
     // lane in practice); the other lanes take the scalar function's powf branch.
     let pos = fzr_my.gt(0.0) & p_r.gt(0.0);
@@ -478,7 +493,7 @@ fn load_terms<const F: bool>(k: &Kernel<'_>, gd: &Guard<F>, x: &Prepared) -> Loa
 
     let v = &p.vertical;
     let cz_p = v.vertical_stiffness * (1.0 + v.pfz1 * dpi);
-    let ufz_r = x.u_fz / fz0;
+    let ufz_r = x.u_fz * k.inv_fz0;
     let deflection_term = (fz0 / cz_p) * (v.dreff * gd.atan(v.breff * ufz_r) + v.freff * ufz_r);
     let ext_scale = (1.0 + v.pfz1 * dpi) * fz0;
 
@@ -537,9 +552,9 @@ fn load_terms<const F: bool>(k: &Kernel<'_>, gd: &Guard<F>, x: &Prepared) -> Loa
 fn my<const F: bool>(k: &Kernel<'_>, gd: &Guard<F>, lt: &LoadTerms, vcx: V, input_kappa: V, fx: V) -> V {
     let p = k.p;
     let q = &p.rolling;
-    let vr = vcx / p.model.longvl;
+    let vr = vcx * k.inv_longvl;
     let vr2 = vr * vr;
-    let m = lt.my_scale * (q.qsy1 + q.qsy2 * (fx / k.fz0) + q.qsy3 * vr.abs() + q.qsy4 * vr2 * vr2 + lt.my_gamma);
+    let m = lt.my_scale * (q.qsy1 + q.qsy2 * (fx * k.inv_fz0) + q.qsy3 * vr.abs() + q.qsy4 * vr2 * vr2 + lt.my_gamma);
     let mut m = sel(vcx.lt(0.0), -m, m);
     let vxlow = p.model.vxlow;
     let high = vxlow / vcx.abs() - 1.0;
@@ -585,8 +600,8 @@ fn rolling_radius(k: &Kernel<'_>, lt: &LoadTerms, vcx: V, input: &Inputs) -> (V,
 fn deflection(k: &Kernel<'_>, x: &Prepared, lt: &LoadTerms, omega: V, r_omega: V, fx: V, fy: V) -> (V, V, V) {
     let v = &k.p.vertical;
     let r0 = k.r0;
-    let fcx = v.q_fcx * fx / k.fz0;
-    let fcy = v.q_fcy * fy / k.fz0;
+    let fcx = v.q_fcx * fx * k.inv_fz0;
+    let fcy = v.q_fcy * fy * k.inv_fz0;
     let ext = ((1.0 + k.qv2_r0_v * omega.abs() - fcx * fcx - fcy * fcy) * lt.ext_scale).max(f64::MIN_POSITIVE);
     let fz = x.fz_low;
     let c = fz / ext;
@@ -759,7 +774,7 @@ fn eval_points<const F: bool>(k: &Kernel<'_>, gd: &Guard<F>, input: &Inputs, x: 
     };
 
     let qx = &p.overturning;
-    let fy_r = fy / k.fz0;
+    let fy_r = fy * k.inv_fz0;
     let g = x.gamma;
     let mx_nm = lt.mx_const
         + lt.mx_fz_lmx * (qx.qsx3 * fy_r + lt.mx_q4 * gd.sin(qx.qsx7 * g + qx.qsx8 * gd.atan(qx.qsx9 * fy_r)))
@@ -810,8 +825,8 @@ pub(crate) fn pure_fy_chunk<const F: bool>(k: &Kernel<'_>, input: &Inputs) -> V 
     let gd = Guard::<F>::default();
     let x = prepare(k, &gd, input);
     let fz0p = k.fz0p;
-    let dfz = (x.fz - fz0p) / fz0p;
-    let dpi = (x.press - k.nompres) / k.nompres;
+    let dfz = (x.fz - fz0p) * k.inv_fz0p;
+    let dpi = (x.press - k.nompres) * k.inv_nompres;
     let (alpha_s, gamma_s) = if k.star {
         let (sin_alpha, cos_alpha) = gd.sin_cos(x.alpha);
         (sin_alpha / cos_alpha * sgn1(x.vcx), gd.sin(x.gamma))
