@@ -353,6 +353,36 @@ pub struct SweepSummary {
 
 crate::ros_message!(SweepSummary, "tyre_msgs", "SweepSummary");
 
+/// `tyre_msgs/DerivedMeasurement`: a tyre property derived live from a finished test section.
+#[derive(Debug, Clone, PartialEq, Default, Serialize, Deserialize)]
+pub struct DerivedMeasurement {
+    /// Stamp (rig time) of the derivation.
+    pub header: Header,
+    /// What it is: `cornering_stiffness`, `rsat`, `rcf`, `loaded_radius`, `vertical_stiffness`,
+    /// `unloaded_radius`, `lateral_relaxation_length`, `longitudinal_stiffness`.
+    pub quantity: String,
+    /// The value, in `unit`.
+    pub value: f64,
+    /// Unit of `value` (`N/deg`, `N*m`, `N`, `m`, `N/m`).
+    pub unit: String,
+    /// Procedure name.
+    pub procedure: String,
+    /// The section it was derived from.
+    pub section: String,
+    /// Mean vertical load (NaN if it spans loads) \[N\].
+    pub fz_n: f64,
+    /// Mean inflation pressure (NaN if it spans pressures) \[Pa\].
+    pub pressure_pa: f64,
+    /// Mean forward speed \[m/s\].
+    pub speed_mps: f64,
+    /// Slip angle the test held (NaN if none) \[deg\].
+    pub slip_angle_deg: f64,
+    /// Clumps, samples or tests that went into it.
+    pub n_points: u32,
+}
+
+crate::ros_message!(DerivedMeasurement, "tyre_msgs", "DerivedMeasurement");
+
 /// `tyre_msgs/QualityCheck`: one quality check's verdict.
 #[derive(Debug, Clone, PartialEq, Default, Serialize, Deserialize)]
 pub struct QualityCheck {

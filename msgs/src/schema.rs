@@ -66,6 +66,7 @@ definitions! {
     "tyre_msgs" / "ThermalState" => "msg/ThermalState.msg",
     "tyre_msgs" / "LiveChannels" => "msg/LiveChannels.msg",
     "tyre_msgs" / "SweepSummary" => "msg/SweepSummary.msg",
+    "tyre_msgs" / "DerivedMeasurement" => "msg/DerivedMeasurement.msg",
     "tyre_msgs" / "QualityCheck" => "msg/QualityCheck.msg",
     "tyre_msgs" / "QualityReport" => "msg/QualityReport.msg",
     "builtin_interfaces" / "Time" => "std/builtin_interfaces/msg/Time.msg",

@@ -16,6 +16,8 @@ pub const THERMAL_STATE: &str = "thermal/state";
 pub const CHANNELS_LIVE: &str = "channels/live";
 /// `tyre_msgs/SweepSummary`: channels → monitor, all.
 pub const SWEEP_SUMMARY: &str = "channels/sweep_summary";
+/// `tyre_msgs/DerivedMeasurement`: channels → all.
+pub const DERIVED: &str = "channels/derived";
 /// `tyre_msgs/QualityReport`: monitor → all.
 pub const QUALITY_REPORT: &str = "quality/report";
 /// `diagnostic_msgs/DiagnosticArray`: every node → all (ROS convention).

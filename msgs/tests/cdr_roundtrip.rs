@@ -32,6 +32,7 @@ fn every_type_round_trips() {
     round_trip::<ThermalState>();
     round_trip::<LiveChannels>();
     round_trip::<SweepSummary>();
+    round_trip::<DerivedMeasurement>();
     round_trip::<QualityCheck>();
     round_trip::<QualityReport>();
     round_trip::<Time>();

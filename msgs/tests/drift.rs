@@ -29,6 +29,7 @@ fn no_rust_type_drifts_from_its_msg_file() {
         check::<ThermalState>(),
         check::<LiveChannels>(),
         check::<SweepSummary>(),
+        check::<DerivedMeasurement>(),
         check::<QualityCheck>(),
         check::<QualityReport>(),
         check::<Time>(),

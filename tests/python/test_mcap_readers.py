@@ -22,6 +22,7 @@ TOPICS = {
     "/rig/thermal/state": "tyre_msgs/msg/ThermalState",
     "/rig/channels/live": "tyre_msgs/msg/LiveChannels",
     "/rig/channels/sweep_summary": "tyre_msgs/msg/SweepSummary",
+    "/rig/channels/derived": "tyre_msgs/msg/DerivedMeasurement",
     "/rig/quality/report": "tyre_msgs/msg/QualityReport",
     "/diagnostics": "diagnostic_msgs/msg/DiagnosticArray",
     "/clock": "rosgraph_msgs/msg/Clock",

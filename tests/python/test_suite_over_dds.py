@@ -94,5 +94,6 @@ def test_staticlong_over_dds_with_a_cyclonedds_control_room(tyrerig, domain_id, 
     print("DDS log:", dict(got), "\nheadless log:", dict(want))
     assert got["/rig/channels/live"] == got["/rig/sample"] > 0
     assert got["/rig/channels/sweep_summary"] == want["/rig/channels/sweep_summary"] > 0
+    assert got["/rig/channels/derived"] == want["/rig/channels/derived"] > 0
     assert got["/rig/quality/report"] >= 1
     assert got["/rig/procedure/state"] > 0 and got["/rig/thermal/state"] > 0

@@ -671,7 +671,8 @@ impl ChannelsCore {
 
     fn end_section(&mut self) {
         let data = std::mem::take(&mut self.section);
-        self.section_key = None;
+        // The key names the section's own procedure (the state may already be the next one's).
+        let procedure = self.section_key.take().map(|(p, _)| p).unwrap_or_default();
         let t = self.last_sample_t;
         let cfg = &self.cfg;
         let mut out = Vec::new();
@@ -855,6 +856,9 @@ impl ChannelsCore {
             m.pressure_pa = mean(&same.iter().map(|&j| drags[j].1).collect::<Vec<_>>());
             m.n_points = same.len();
             out.push(m);
+        }
+        for m in &mut out {
+            m.procedure.clone_from(&procedure);
         }
         self.out_derived.extend(out);
     }

@@ -82,6 +82,9 @@ pub struct DerivedMeasurement {
     pub n_points: usize,
     /// RUNTIME when it was derived [s].
     pub rig_time_s: f64,
+    /// Procedure it came from (set by the core when it publishes).
+    #[serde(default)]
+    pub procedure: String,
 }
 
 impl DerivedMeasurement {
@@ -97,6 +100,24 @@ impl DerivedMeasurement {
             slip_angle_deg: f64::NAN,
             n_points: 0,
             rig_time_s,
+            procedure: String::new(),
+        }
+    }
+
+    /// As the `channels/derived` message.
+    pub fn to_msg(&self) -> tyre_msgs::DerivedMeasurement {
+        tyre_msgs::DerivedMeasurement {
+            header: tyre_msgs::std_msgs::Header::iso_w(self.rig_time_s),
+            quantity: self.quantity.name().to_owned(),
+            value: self.value,
+            unit: self.quantity.unit().to_owned(),
+            procedure: self.procedure.clone(),
+            section: self.section.clone(),
+            fz_n: self.fz_n,
+            pressure_pa: self.pressure_pa,
+            speed_mps: self.speed_mps,
+            slip_angle_deg: self.slip_angle_deg,
+            n_points: u32::try_from(self.n_points).unwrap_or(u32::MAX),
         }
     }
 }

@@ -11,7 +11,7 @@
 use futures::StreamExt;
 use node_runtime::{RosNode, RuntimeError, Shutdown, SuiteTopic};
 use tyre_msgs::diagnostic_msgs::DiagnosticArray;
-use tyre_msgs::{LiveChannels, ProcedureState, QualityReport, RigSample, SweepSummary};
+use tyre_msgs::{DerivedMeasurement, LiveChannels, ProcedureState, QualityReport, RigSample, SweepSummary};
 
 use crate::config::{ConfigError, MonitorConfig, TyreInfo};
 use crate::pipeline::{Pipeline, PipelineError, PipelineOutput};
@@ -95,6 +95,7 @@ pub async fn run(mut node: RosNode, cfg: QualityNodeConfig, shutdown: Shutdown) 
     let mut p = Pipeline::new(cfg.channels, cfg.monitor, tyre)?;
     let live_pub = node.publisher::<LiveChannels>(SuiteTopic::LiveChannels)?;
     let sum_pub = node.publisher::<SweepSummary>(SuiteTopic::SweepSummary)?;
+    let derived_pub = node.publisher::<DerivedMeasurement>(SuiteTopic::Derived)?;
     let rep_pub = node.publisher::<QualityReport>(SuiteTopic::QualityReport)?;
     let diag_pub = node.publisher::<DiagnosticArray>(SuiteTopic::Diagnostics)?;
     let samples = node.subscription::<RigSample>(SuiteTopic::RigSample)?;
@@ -111,6 +112,7 @@ pub async fn run(mut node: RosNode, cfg: QualityNodeConfig, shutdown: Shutdown) 
             let _ = sum_pub.publish(x);
         }
         for d in &o.derived {
+            let _ = derived_pub.publish(d.to_msg());
             tracing::info!(
                 "{}: {} = {} {} (Fz {:.0} N, p {:.0} Pa)",
                 d.section,
@@ -146,7 +148,10 @@ pub async fn run(mut node: RosNode, cfg: QualityNodeConfig, shutdown: Shutdown) 
             },
         }
     }
-    // The sweep in progress and the final verdicts (a recorder still running logs them).
+    // The sweep in progress, the last section's derived measurements and the final verdicts (a
+    // recorder still running logs them). The participant lives on briefly so that reliable DDS
+    // delivers them before it goes.
     publish(p.finish(), false);
+    tokio::time::sleep(std::time::Duration::from_millis(300)).await;
     Ok(())
 }

@@ -10,8 +10,8 @@ use ros2_client::{
 };
 use std::time::Duration;
 use tyre_msgs::{
-    LiveChannels, ProcedureCommand, ProcedureState, QualityReport, RigSample, RigSetpoint, RosMessage, SweepSummary,
-    ThermalState, diagnostic_msgs::DiagnosticArray, rosgraph_msgs::Clock, topics as names,
+    DerivedMeasurement, LiveChannels, ProcedureCommand, ProcedureState, QualityReport, RigSample, RigSetpoint,
+    RosMessage, SweepSummary, ThermalState, diagnostic_msgs::DiagnosticArray, rosgraph_msgs::Clock, topics as names,
 };
 
 /// QoS presets. Names say what the topic is used for, not how DDS does it.
@@ -84,6 +84,7 @@ pub enum SuiteTopic {
     ThermalState,
     LiveChannels,
     SweepSummary,
+    Derived,
     QualityReport,
     Diagnostics,
     Clock,
@@ -97,7 +98,7 @@ pub trait TopicVisitor {
 }
 
 impl SuiteTopic {
-    pub const ALL: [SuiteTopic; 10] = [
+    pub const ALL: [SuiteTopic; 11] = [
         SuiteTopic::RigSample,
         SuiteTopic::RigSetpoint,
         SuiteTopic::ProcedureState,
@@ -105,6 +106,7 @@ impl SuiteTopic {
         SuiteTopic::ThermalState,
         SuiteTopic::LiveChannels,
         SuiteTopic::SweepSummary,
+        SuiteTopic::Derived,
         SuiteTopic::QualityReport,
         SuiteTopic::Diagnostics,
         SuiteTopic::Clock,
@@ -120,6 +122,7 @@ impl SuiteTopic {
             SuiteTopic::ThermalState => (names::THERMAL_STATE, Qos::Stream),
             SuiteTopic::LiveChannels => (names::CHANNELS_LIVE, Qos::Stream),
             SuiteTopic::SweepSummary => (names::SWEEP_SUMMARY, Qos::Events),
+            SuiteTopic::Derived => (names::DERIVED, Qos::Events),
             SuiteTopic::QualityReport => (names::QUALITY_REPORT, Qos::Events),
             SuiteTopic::Diagnostics => (names::DIAGNOSTICS, Qos::Diagnostics),
             SuiteTopic::Clock => (names::CLOCK, Qos::Clock),
@@ -166,6 +169,7 @@ impl SuiteTopic {
             SuiteTopic::ThermalState => visitor.visit::<ThermalState>(self),
             SuiteTopic::LiveChannels => visitor.visit::<LiveChannels>(self),
             SuiteTopic::SweepSummary => visitor.visit::<SweepSummary>(self),
+            SuiteTopic::Derived => visitor.visit::<DerivedMeasurement>(self),
             SuiteTopic::QualityReport => visitor.visit::<QualityReport>(self),
             SuiteTopic::Diagnostics => visitor.visit::<DiagnosticArray>(self),
             SuiteTopic::Clock => visitor.visit::<Clock>(self),

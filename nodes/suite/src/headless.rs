@@ -206,6 +206,9 @@ impl Headless {
         for ss in &p.sweep_summaries {
             sink.put(t, Outgoing::SweepSummary(ss))?;
         }
+        for d in &p.derived {
+            sink.put(t, Outgoing::Derived(&d.to_msg()))?;
+        }
         if let Some(r) = &p.report {
             sink.put(t, Outgoing::Quality(r))?;
         }

@@ -3,8 +3,8 @@
 use mcaplog::{LogWriteError, McapLog, McapLogOptions, codec};
 use std::{collections::BTreeMap, path::Path};
 use tyre_msgs::{
-    LiveChannels, ProcedureState, QualityReport, RigSample, RigSetpoint, RosMessage, SweepSummary, ThermalState,
-    diagnostic_msgs::DiagnosticArray, topics,
+    DerivedMeasurement, LiveChannels, ProcedureState, QualityReport, RigSample, RigSetpoint, RosMessage, SweepSummary,
+    ThermalState, diagnostic_msgs::DiagnosticArray, topics,
 };
 
 /// One message leaving the cores, tagged with its topic.
@@ -16,6 +16,7 @@ pub enum Outgoing<'a> {
     Procedure(&'a ProcedureState),
     Live(&'a LiveChannels),
     SweepSummary(&'a SweepSummary),
+    Derived(&'a DerivedMeasurement),
     Quality(&'a QualityReport),
     Diagnostics(&'a DiagnosticArray),
 }
@@ -30,6 +31,7 @@ impl Outgoing<'_> {
             Outgoing::Procedure(_) => topics::PROCEDURE_STATE,
             Outgoing::Live(_) => topics::CHANNELS_LIVE,
             Outgoing::SweepSummary(_) => topics::SWEEP_SUMMARY,
+            Outgoing::Derived(_) => topics::DERIVED,
             Outgoing::Quality(_) => topics::QUALITY_REPORT,
             Outgoing::Diagnostics(_) => topics::DIAGNOSTICS,
         }
@@ -121,6 +123,7 @@ impl MessageSink for McapSink {
             Outgoing::Procedure(m) => self.write(topic, t_s, m),
             Outgoing::Live(m) => self.write(topic, t_s, m),
             Outgoing::SweepSummary(m) => self.write(topic, t_s, m),
+            Outgoing::Derived(m) => self.write(topic, t_s, m),
             Outgoing::Quality(m) => self.write(topic, t_s, m),
             Outgoing::Diagnostics(m) => self.write(topic, t_s, m),
         }
