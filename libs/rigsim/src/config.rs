@@ -456,14 +456,15 @@ impl Default for ThermalParams {
             belt_contact_w_per_k: 64.22,
             bulk_to_air_w_per_k: 41.0,
             surface_fraction_lateral: 0.5263,
-            surface_fraction_longitudinal: 0.21,
+            // The four longitudinal values: `tune_thermal 120 longitudinal` (see virtual_rig.toml).
+            surface_fraction_longitudinal: 0.1666,
             bulk_fraction_lateral: 0.3088,
-            bulk_fraction_longitudinal: 0.16,
+            bulk_fraction_longitudinal: 0.1355,
             rolling_loss_coefficient: 0.02543,
             flash_lateral_k_per_kw: 0.9575,
-            flash_longitudinal_k_per_kw: 1.644,
+            flash_longitudinal_k_per_kw: 2.454,
             flash_time_constant_s: 0.7736,
-            flash_longitudinal_time_constant_s: 0.6161,
+            flash_longitudinal_time_constant_s: 2.026,
             camber_zone_share_per_deg: 0.05,
         }
     }

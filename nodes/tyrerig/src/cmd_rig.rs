@@ -3,7 +3,8 @@
 //! `tyrerig rig calibrate` runs the comparison sweeps of Tables 3.6.2-H (FreeRolling) and
 //! 3.6.2-I (BrkDrv) on the virtual rig with the default tyre, the warm-up check and the wear
 //! check (see `rigsim::calibration`), prints the virtual rig's figures beside the thesis's, and
-//! optionally writes them as JSON and plots each sweep.
+//! optionally writes them as JSON and plots each sweep. `--seeds N` runs it for N noise seeds
+//! and prints every figure's min–max over them.
 
 use std::path::{Path, PathBuf};
 
@@ -31,45 +32,90 @@ pub enum RigCmd {
         /// Write a PNG per comparison sweep (force vs slip, TRDTEMPC vs time) into this directory
         #[arg(long, value_name = "DIR")]
         plots: Option<PathBuf>,
+        /// Also run the calibration for N noise seeds (the config's seed and the next N − 1) and
+        /// print each figure's min–max over them; fails if any seed misses a criterion
+        #[arg(long, value_name = "N", default_value_t = 1)]
+        seeds: u64,
     },
 }
 
 /// Runs a `rig` subcommand.
 pub fn run(cmd: RigCmd) -> anyhow::Result<()> {
     match cmd {
-        RigCmd::Calibrate { json, config, effects, plots } => {
-            calibrate(&config, effects.as_deref(), json.as_deref(), plots.as_deref())
+        RigCmd::Calibrate { json, config, effects, plots, seeds } => {
+            calibrate(&config, effects.as_deref(), json.as_deref(), plots.as_deref(), seeds)
         }
     }
 }
 
-fn calibrate(config: &Path, effects: Option<&str>, json: Option<&Path>, plots: Option<&Path>) -> anyhow::Result<()> {
+fn calibrate(
+    config: &Path,
+    effects: Option<&str>,
+    json: Option<&Path>,
+    plots: Option<&Path>,
+    seeds: u64,
+) -> anyhow::Result<()> {
     let mut cfg = RigConfig::load(config)?;
     if let Some(e) = effects {
         cfg.effects = Effects::parse(e).context("--effects")?;
     }
     let params =
         TyreParams::read_tir(&cfg.tyre_file).with_context(|| format!("tyre file {}", cfg.tyre_file.display()))?;
-    let report = rigsim::calibration::run_calibration(&cfg, &params)?;
+    let seeds = seeds.max(1);
+    let reports = rigsim::calibration::run_calibration_seeds(&cfg, &params, cfg.seed..cfg.seed + seeds)?;
+    let report = &reports[0];
     println!("Virtual rig calibration ({}; effects: {}; seed {})", config.display(), cfg.effects, cfg.seed);
-    print!("{}", rigsim::calibration::format_report(&report));
+    print!("{}", rigsim::calibration::format_report(report));
+    let spread = (seeds > 1).then(|| rigsim::calibration::seed_spread(&reports));
+    if let Some(sp) = &spread {
+        println!();
+        print!("{}", rigsim::calibration::format_spread(sp));
+    }
     if let Some(path) = json {
+        let o = &report.brkdrv_optimum;
         let value = serde_json::json!({
+            "seed": report.seed,
             "freerolling": report.freerolling,
             "brkdrv": report.brkdrv,
-            "brkdrv_optimum_th2_ungraded": report.brkdrv_optimum,
+            "brkdrv_variable_note": rigsim::calibration::BRKDRV_VARIABLE_NOTE,
+            "brkdrv_optimum_th2": {
+                "sweep": "variable",
+                "low_rate_per_s": 0.10,
+                "high_rate_per_s": 0.60,
+                "threshold": rigsim::calibration::BRKDRV_OPTIMUM_THRESHOLD,
+                "hysteresis_n": o.hysteresis_n,
+                "peak_temp_c": o.peak_temp_c,
+                "sweep_plus_cool_s": o.sweep_plus_cool_s,
+                "sweep_s": o.sweep_s,
+                "sliding_energy_kj": o.sliding_energy_kj,
+                "graded": false,
+                "thesis": o.thesis,
+                "thesis_note": "the thesis figures are of BrkDrv_sw14 (10 % threshold), shown for comparison only",
+            },
+            "threshold_analysis": report.threshold_analysis,
             "warmup": report.warmup,
             "wear": report.wear,
             "investigation_wear": report.investigation_wear,
             "pass": report.pass(),
             "failures": report.failures,
+            "seeds": spread.as_ref().map(|sp| serde_json::json!({
+                "spread": sp,
+                "per_seed": reports.iter().map(|r| serde_json::json!({
+                    "seed": r.seed, "pass": r.pass(), "failures": r.failures,
+                })).collect::<Vec<_>>(),
+            })),
         });
         std::fs::write(path, serde_json::to_string_pretty(&value)? + "\n")
             .with_context(|| format!("writing {}", path.display()))?;
         println!("wrote {}", path.display());
     }
     if let Some(dir) = plots {
-        write_plots(&report, dir)?;
+        write_plots(report, dir)?;
+    }
+    if let Some(sp) = &spread
+        && !sp.failed_seeds.is_empty()
+    {
+        anyhow::bail!("calibration missed a criterion for seeds {:?}", sp.failed_seeds);
     }
     Ok(())
 }
