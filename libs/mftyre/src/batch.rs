@@ -245,7 +245,7 @@ impl BatchOutput {
 
 /// Evaluates every point of `inputs` into `out` (cleared first; allocations reused).
 ///
-/// Points are evaluated [`L`](crate::lanes::L) at a time by the lane-wise kernel (`kernel.rs`),
+/// Points are evaluated four at a time by the lane-wise kernel (`kernel.rs`),
 /// whose results agree with [`crate::evaluate`] point by point to a few ulp (≤ 1e-13 relative,
 /// tested); runs of points that share Fz, pressure and camber (sweeps) reuse the load-dependent
 /// terms.

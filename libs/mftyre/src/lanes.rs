@@ -7,14 +7,16 @@
 //! reduction constant split so that `k·C_hi` is exact), then a polynomial on the reduced range.
 //! The polynomial coefficients are Chebyshev fits computed for this crate with mpmath
 //! (`mpmath.chebyfit` at 60 digits; the fitted function and range are given at each table) —
-//! they agree with the Taylor coefficients in their leading digits. Accuracy against `std`
-//! (tests below): ≤ 2 ulp for atan, sin, cos, exp, ln and cbrt over wide ranges. Lanes whose
-//! argument is outside the fast path's range (huge, non-finite, subnormal, …) are recomputed with
-//! `std`, so every lane is always right; the check costs one compare per lane.
+//! they agree with the Taylor coefficients in their leading digits. Polynomials are evaluated by
+//! Estrin's scheme (the kernel is latency-bound, and Estrin's chains are log₂ N long). Accuracy
+//! against `std` (tests below): ≤ 2 ulp for atan, sin, cos, exp, ln and cbrt over wide ranges,
+//! with and without FMA.
 //!
-//! Plain `a * b + c` is used throughout, never `mul_add`: with FMA unavailable `mul_add` is a
-//! slow library call, and without contraction both the portable and the AVX2 build of the kernel
-//! give bit-identical results.
+//! The functions are reached through [`Guard`], which records the lanes whose argument is outside
+//! a fast path's range (|x| > 1e5 for sin/cos, |x| > 708 for exp, non-normal x for ln/cbrt); the
+//! kernel then redoes that chunk with the scalar model, so the fast paths stay branch-free.
+//! `Guard<F>`: with `F` (the AVX2+FMA build) multiply-adds are fused; without, they are a plain
+//! `a * b + c` (`mul_add` without hardware FMA would be a slow library call).
 
 use std::ops::{Add, BitAnd, BitOr, Div, Mul, Neg, Not, Sub};
 
