@@ -365,24 +365,47 @@ pub fn mechanical_hysteresis(crossing_forces_n: &[f64]) -> f64 {
 
 /// Within this fraction of the arming threshold the slip counts as at zero.
 const TOUCH_FRACTION: f64 = 0.05;
+/// Half-width of the window around zero slip whose samples give the force at zero, as a
+/// fraction of the arming threshold (chosen: 0.5° of slip angle, 0.5 % of slip ratio with the
+/// default arms: inside the linear range, wide enough for ~10 samples at 100 Hz and 10 %/s).
+const WINDOW_FRACTION: f64 = 0.5;
 
-/// Finds zero-slip crossings in a stream of (slip, force) and records the force at each,
-/// interpolated to slip = 0. A crossing counts only after the slip has been beyond `arm` since
-/// the previous one, so noise around zero does not make crossings; returning to exactly zero
-/// (touching) counts as a crossing too.
+/// Finds zero-slip crossings in a stream of (slip, force) and records the force at each.
+///
+/// The force at zero slip is read the way an engineer reads it off the plot: a straight line
+/// fitted (least squares) to the pass's samples within a small window around zero slip, plus
+/// the sample on each side of it, evaluated at slip = 0. One sample's noise (a single noisy
+/// force or slip reading interpolated across zero) would otherwise set the figure; the fit
+/// averages over the pass. A crossing counts only after the slip has been beyond `arm` since the
+/// previous one, so noise around zero does not make crossings; returning to zero (within a
+/// twentieth of `arm`: a sweep that ends at zero may stop a hair short) counts as a crossing too.
 #[derive(Debug, Clone)]
 pub struct ZeroCrossings {
     arm: f64,
+    window: f64,
     armed: bool,
     prev: Option<(f64, f64)>,
-    /// Forces at the crossings so far [N].
+    /// The near-zero pass in progress: the sample before it and those inside the window.
+    pass: Vec<(f64, f64)>,
+    pass_armed: bool,
+    pass_at_zero: bool,
+    /// Forces at the completed crossings so far [N].
     pub forces_n: Vec<f64>,
 }
 
 impl ZeroCrossings {
     /// A tracker arming at |slip| > `arm`.
     pub fn new(arm: f64) -> Self {
-        Self { arm, armed: false, prev: None, forces_n: Vec::new() }
+        Self {
+            arm,
+            window: WINDOW_FRACTION * arm,
+            armed: false,
+            prev: None,
+            pass: Vec::new(),
+            pass_armed: false,
+            pass_at_zero: false,
+            forces_n: Vec::new(),
+        }
     }
 
     /// Feeds one (slip, force) pair; NaN pairs are skipped.
@@ -393,29 +416,62 @@ impl ZeroCrossings {
         if slip.abs() > self.arm {
             self.armed = true;
         }
-        if let Some((ps, pf)) = self.prev
-            && self.armed
-        {
-            let crossed = (ps > 0.0 && slip <= 0.0) || (ps < 0.0 && slip >= 0.0);
-            // A sweep that ends at zero slip may stop a hair short of it: arriving within a
-            // twentieth of the arming threshold counts as reaching zero.
-            let arrived = slip.abs() <= TOUCH_FRACTION * self.arm;
-            if crossed {
-                let f = if slip == ps { force } else { pf + (force - pf) * (-ps) / (slip - ps) };
-                self.forces_n.push(f);
-                self.armed = slip.abs() > self.arm;
-            } else if arrived {
-                self.forces_n.push(force);
+        let crossed = self.prev.is_some_and(|(ps, _)| (ps > 0.0 && slip <= 0.0) || (ps < 0.0 && slip >= 0.0));
+        if slip.abs() <= self.window {
+            if self.pass.is_empty() {
+                self.pass_armed = self.armed;
+                self.pass_at_zero = false;
+                self.pass.extend(self.prev);
+            }
+            self.pass.push((slip, force));
+            self.pass_at_zero |= crossed || slip.abs() <= TOUCH_FRACTION * self.arm;
+        } else if !self.pass.is_empty() {
+            self.pass.push((slip, force));
+            if self.pass_counts() {
+                self.forces_n.push(force_at_zero(&self.pass));
                 self.armed = false;
             }
+            self.pass.clear();
+        } else if crossed && self.armed {
+            // Across the whole window between two samples (a very fast sweep): interpolate.
+            self.forces_n.push(force_at_zero(&[self.prev.unwrap_or((slip, force)), (slip, force)]));
+            self.armed = false;
         }
         self.prev = Some((slip, force));
     }
 
+    fn pass_counts(&self) -> bool {
+        self.pass_armed && self.pass_at_zero
+    }
+
+    /// Forces at every crossing so far, the pass still near zero included (a sweep that ends
+    /// at zero slip ends inside the window) [N].
+    pub fn crossing_forces_n(&self) -> Vec<f64> {
+        let mut f = self.forces_n.clone();
+        if !self.pass.is_empty() && self.pass_counts() {
+            f.push(force_at_zero(&self.pass));
+        }
+        f
+    }
+
     /// max − min of the crossing forces (NaN with fewer than two).
     pub fn hysteresis_n(&self) -> f64 {
-        mechanical_hysteresis(&self.forces_n)
+        mechanical_hysteresis(&self.crossing_forces_n())
     }
+}
+
+/// The least-squares line through (slip, force) evaluated at slip = 0; the mean force when the
+/// slips do not spread.
+fn force_at_zero(pts: &[(f64, f64)]) -> f64 {
+    let n = pts.len() as f64;
+    let mx = pts.iter().map(|p| p.0).sum::<f64>() / n;
+    let my = pts.iter().map(|p| p.1).sum::<f64>() / n;
+    let sxx: f64 = pts.iter().map(|p| (p.0 - mx).powi(2)).sum();
+    let sxy: f64 = pts.iter().map(|p| (p.0 - mx) * (p.1 - my)).sum();
+    if sxx <= 1e-12 * (1.0 + mx * mx) {
+        return my;
+    }
+    my - sxy / sxx * mx
 }
 
 /// Calspan slip ratio (thesis §3.6.2): SR = (VX1/W1)·(W/VX) − 1, with VX1 and W1 taken free
@@ -526,6 +582,33 @@ mod tests {
         assert_relative_eq!(z.hysteresis_n(), 3950.0, epsilon = 1e-6);
         assert_relative_eq!(mechanical_hysteresis(&[1730.0, -2220.0]), 3950.0);
         assert!(mechanical_hysteresis(&[1.0]).is_nan());
+    }
+
+    /// Force noise on one sample moves a two-point interpolation by its full size; the pass's
+    /// line fit moves far less.
+    #[test]
+    fn one_noisy_sample_barely_moves_the_fitted_crossing() {
+        let run = |spike: f64| {
+            let mut z = ZeroCrossings::new(1.0);
+            // 5 → −5 → 5 at 0.02° per sample (2 °/s at 100 Hz): FY = −2750·SA ± 150 lag.
+            let mut sa: f64 = 0.0;
+            let mut dir = 1.0;
+            for i in 0..1500 {
+                sa += dir * 0.02;
+                if sa.abs() >= 5.0 {
+                    dir = -dir;
+                }
+                let mut fy = -2750.0 * sa + 150.0 * dir;
+                if i == 1000 {
+                    fy += spike; // the sample nearest a crossing
+                }
+                z.push(sa, fy);
+            }
+            z.hysteresis_n()
+        };
+        assert_relative_eq!(run(0.0), 300.0, epsilon = 1e-6);
+        let moved = (run(500.0) - 300.0).abs();
+        assert!(moved < 50.0, "a 500 N spike moved the hysteresis by {moved} N");
     }
 
     #[test]
