@@ -438,7 +438,7 @@ impl Builder {
             (Some(r), ..) => RateLaw::Constant { rate: r * k },
             (None, Some(lo), Some(hi), Some(th)) => match self.inputs.sweeps {
                 SweepStyle::Variable => RateLaw::Variable { low_rate: lo * k, high_rate: hi * k, threshold: th * k },
-                SweepStyle::Continuous => RateLaw::continuous_from_variable(lo * k, hi * k, th * k),
+                SweepStyle::Continuous => RateLaw::continuous_from_variable(lo * k, hi * k, th * k, axis),
             },
             // Validation guarantees one of the two forms.
             _ => RateLaw::Constant { rate: 1.0 },
