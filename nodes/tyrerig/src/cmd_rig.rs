@@ -91,6 +91,7 @@ fn calibrate(
                 "graded": false,
                 "thesis": o.thesis,
                 "thesis_note": "the thesis figures are of BrkDrv_sw14 (10 % threshold), shown for comparison only",
+                "misses_if_graded_as_variable": report.brkdrv_optimum_as_variable_misses,
             },
             "threshold_analysis": report.threshold_analysis,
             "warmup": report.warmup,
