@@ -285,15 +285,25 @@ pub fn summary_from_log(log: &mcaplog::LogReader, namespace: &str) -> Result<Run
         }
         was_timed_out = timed_out;
     }
+    // /diagnostics repeats every verdict with every report; an alarm is a verdict that rose
+    // (OK → WARN, WARN → ERROR), as the monitor raises them live, and every new hot start.
+    let mut last: std::collections::BTreeMap<String, (u8, String)> = std::collections::BTreeMap::new();
     for (_, d) in &diags {
         for s in &d.status {
-            let level = match s.level {
-                tyre_msgs::diagnostic_msgs::DiagnosticStatus::WARN => "WARN",
-                tyre_msgs::diagnostic_msgs::DiagnosticStatus::ERROR => "ERROR",
-                _ => continue,
-            };
+            use tyre_msgs::diagnostic_msgs::DiagnosticStatus as DS;
             let check = s.name.rsplit(": ").next().unwrap_or(&s.name).to_owned();
-            b.alarm(level, &check, s.message.clone(), d.header.stamp.as_secs_f64());
+            let (old_level, old_message) = last.get(&check).cloned().unwrap_or((DS::OK, String::new()));
+            let raised =
+                s.level > old_level || (check == "thermal_timeout" && s.level >= DS::WARN && s.message != old_message);
+            let level = match s.level {
+                DS::WARN => "WARN",
+                DS::ERROR => "ERROR",
+                _ => "",
+            };
+            if raised && !level.is_empty() {
+                b.alarm(level, &check, s.message.clone(), d.header.stamp.as_secs_f64());
+            }
+            last.insert(check, (s.level, s.message.clone()));
         }
     }
     b.summary.tyres_used = b.summary.tyre_changes.max(1);

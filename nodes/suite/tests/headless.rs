@@ -73,6 +73,16 @@ fn summary_from_the_log_matches_the_live_summary() {
     let finite = |v: &[f64]| v.iter().copied().filter(|w| w.is_finite()).collect::<Vec<_>>();
     println!("wear measured: live {:?}, from log {:?}", live.wear_mm_measured, from_log.wear_mm_measured);
     assert!(!finite(&live.wear_mm_measured).is_empty(), "the monitor measured no wear");
+    // The same alarms, each at most one sample period (0.1 s) apart: /diagnostics is published
+    // with the report that follows the verdict.
+    let alarms =
+        |s: &suite::RunSummary| s.alarms.iter().map(|a| (a.check.clone(), a.level.clone())).collect::<Vec<_>>();
+    println!("alarms: live {:?}\nfrom log {:?}", live.alarms, from_log.alarms);
+    assert!(!live.alarms.is_empty(), "a new tyre's FreeRolling raises break_in: the comparison must not be empty");
+    assert_eq!(alarms(&from_log), alarms(&live));
+    for (a, b) in from_log.alarms.iter().zip(&live.alarms) {
+        assert!((a.rig_time_s - b.rig_time_s).abs() <= 0.11, "{a:?} vs {b:?}");
+    }
     assert_eq!(finite(&from_log.wear_mm_measured), finite(&live.wear_mm_measured));
 }
 
