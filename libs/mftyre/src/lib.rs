@@ -8,9 +8,9 @@
 //!   than 1e-10 relative (≤ 2e-11 N, 1e-12 N·m absolute) on its reference tables;
 //!   [`evaluate_batch`] for struct-of-arrays batches: a lane-wise kernel that evaluates four
 //!   points at once with its own vectorised atan/sin/cos/exp/ln (≤ 2 ulp), agreeing with
-//!   [`evaluate`] to ≤ 1e-13 relative, with an AVX2+FMA build chosen at run time (about 5.2 M
-//!   full combined-slip evaluations per second per core on random points, 9.8 M along sweeps,
-//!   45 M pure Fy; `cargo run --release -p mftyre --example throughput`, README "Speed");
+//!   [`evaluate`] to ≤ 1e-13 relative, with an AVX2+FMA build chosen at run time (5.1–5.3 M
+//!   full combined-slip evaluations per second per core on random points, 9.6–10 M along sweeps,
+//!   50 M pure Fy; `cargo run --release -p mftyre --example throughput`, README "Speed");
 //!   [`pure_fy`] / [`pure_fx`] for the cheapest pure-slip calls.
 //!
 //! Turn slip is not modelled: the model is evaluated with φt = 0 whatever the input says
