@@ -123,9 +123,10 @@ pub struct BatchOutput {
     pub clamped: Vec<Clamped>,
 }
 
-/// The `f64` columns (every column but `clamped`).
+/// Calls `$m!(fx_n, fy_n, …, kxk_n $(, extra)*)`: the `f64` columns (every column but
+/// `clamped`), then any extra names. The one list of output columns; the kernel uses it too.
 macro_rules! for_each_value_column {
-    ($m:ident) => {
+    ($m:ident $(, $extra:ident)*) => {
         $m!(
             fx_n,
             fy_n,
@@ -156,44 +157,16 @@ macro_rules! for_each_value_column {
             sigmax_m,
             sigmay_m,
             kxk_n
+            $(, $extra)*
         )
     };
 }
+pub(crate) use for_each_value_column;
 
+/// Every column, `clamped` last.
 macro_rules! for_each_column {
     ($m:ident) => {
-        $m!(
-            fx_n,
-            fy_n,
-            fz_n,
-            mx_nm,
-            my_nm,
-            mz_nm,
-            kappa,
-            alpha_rad,
-            gamma_rad,
-            phit_per_m,
-            vx_mps,
-            p_pa,
-            re_m,
-            rho_m,
-            contact_length_m,
-            trail_m,
-            mux,
-            muy,
-            omega_radps,
-            rl_m,
-            contact_width_m,
-            mzr_nm,
-            cx_npm,
-            cy_npm,
-            cz_npm,
-            kya_nprad,
-            sigmax_m,
-            sigmay_m,
-            kxk_n,
-            clamped
-        )
+        for_each_value_column!($m, clamped)
     };
 }
 

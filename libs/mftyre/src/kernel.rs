@@ -658,37 +658,7 @@ fn scalar_chunk(k: &Kernel<'_>, input: &Inputs) -> Outputs {
             Outputs { $( $f: V(std::array::from_fn(|i| o[i].$f)), )* clamped: std::array::from_fn(|i| o[i].clamped) }
         };
     }
-    lanes_of!(
-        fx_n,
-        fy_n,
-        fz_n,
-        mx_nm,
-        my_nm,
-        mz_nm,
-        kappa,
-        alpha_rad,
-        gamma_rad,
-        phit_per_m,
-        vx_mps,
-        p_pa,
-        re_m,
-        rho_m,
-        contact_length_m,
-        trail_m,
-        mux,
-        muy,
-        omega_radps,
-        rl_m,
-        contact_width_m,
-        mzr_nm,
-        cx_npm,
-        cy_npm,
-        cz_npm,
-        kya_nprad,
-        sigmax_m,
-        sigmay_m,
-        kxk_n
-    )
+    crate::batch::for_each_value_column!(lanes_of)
 }
 
 #[inline(always)]
