@@ -140,7 +140,8 @@ fn typed_config_check(entry: &NodeEntry) -> anyhow::Result<()> {
             let _: test_pattern::TestPatternConfig = config_of(entry)?;
         }
         Some(NodeKind::VirtualRig) => {
-            let _: virtual_rig::VirtualRigNodeConfig = config_of(entry)?;
+            let c: virtual_rig::VirtualRigNodeConfig = config_of(entry)?;
+            c.validate()?;
         }
         Some(NodeKind::Thermal) => {
             let c: thermal::ThermalConfig = config_of(entry)?;
@@ -230,6 +231,17 @@ mod tests {
         ] {
             std::fs::write(&path, format!("[[node]]\nname = \"q\"\nkind = \"quality\"\n[node.config]\n{body}\n"))
                 .expect("write");
+            let err = format!("{:#}", LaunchFile::load(&path).expect_err(body));
+            assert!(err.contains("bad.toml") && err.contains("\"q\"") && err.contains(expect), "{body}: {err}");
+        }
+        for (body, expect) in [("time_scale = 0.0", "time_scale"), ("time_scale = -3.0", "time_scale")] {
+            std::fs::write(
+                &path,
+                format!(
+                    "[[node]]\nname = \"q\"\nkind = \"virtual_rig\"\n[node.config]\nrig_config = \"x.toml\"\n{body}\n"
+                ),
+            )
+            .expect("write");
             let err = format!("{:#}", LaunchFile::load(&path).expect_err(body));
             assert!(err.contains("bad.toml") && err.contains("\"q\"") && err.contains(expect), "{body}: {err}");
         }

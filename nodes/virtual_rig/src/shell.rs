@@ -41,6 +41,36 @@ pub struct VirtualRigNodeConfig {
     /// Wall time to wait before the first sample, so the other nodes discover the rig [s].
     #[serde(default = "default_start_delay")]
     pub start_delay_s: f64,
+    /// Realtime clock: simulated seconds per wall second (1 = real time, 10 = ten times
+    /// faster; every node follows `/clock` and message stamps, none the wall clock).
+    #[serde(default = "default_time_scale")]
+    pub time_scale: f64,
+}
+
+fn default_time_scale() -> f64 {
+    1.0
+}
+
+impl VirtualRigNodeConfig {
+    /// Checks the values a TOML type check cannot.
+    pub fn validate(&self) -> Result<(), VirtualRigNodeError> {
+        let positive = |key: &'static str, v: f64| {
+            if v.is_finite() && v > 0.0 {
+                Ok(())
+            } else {
+                Err(VirtualRigNodeError::Config { key, detail: format!("{v} (expected a finite value > 0)") })
+            }
+        };
+        positive("time_scale", self.time_scale)?;
+        positive("lockstep_timeout_s", self.lockstep_timeout_s)?;
+        if !(self.start_delay_s.is_finite() && self.start_delay_s >= 0.0) {
+            return Err(VirtualRigNodeError::Config {
+                key: "start_delay_s",
+                detail: format!("{} (expected a finite value ≥ 0)", self.start_delay_s),
+            });
+        }
+        Ok(())
+    }
 }
 
 fn default_start_delay() -> f64 {
@@ -63,6 +93,8 @@ pub enum VirtualRigNodeError {
     Runtime(#[from] RuntimeError),
     #[error("virtual rig: publishing on {topic} failed: {detail}")]
     Publish { topic: &'static str, detail: String },
+    #[error("virtual rig: `{key}` = {detail}")]
+    Config { key: &'static str, detail: String },
 }
 
 /// Builds the simulator from the node config.
@@ -82,6 +114,7 @@ pub fn build_rig(cfg: &VirtualRigNodeConfig) -> Result<VirtualRig, VirtualRigNod
 
 /// Runs the rig until shutdown (or `max_sim_time_s`).
 pub async fn run(mut node: RosNode, cfg: VirtualRigNodeConfig, shutdown: Shutdown) -> Result<(), VirtualRigNodeError> {
+    cfg.validate()?;
     let mut rig = build_rig(&cfg)?;
     let samples = node.publisher::<RigSample>(SuiteTopic::RigSample)?;
     let clock = node.publisher::<Clock>(SuiteTopic::Clock)?;
@@ -112,7 +145,7 @@ pub async fn run(mut node: RosNode, cfg: VirtualRigNodeConfig, shutdown: Shutdow
     }
     let wall_start = tokio::time::Instant::now();
     let sim_start = rig.time_s();
-    tracing::info!(clock = ?cfg.clock, "virtual rig running");
+    tracing::info!(clock = ?cfg.clock, time_scale = cfg.time_scale, "virtual rig running");
     loop {
         if shutdown.is_triggered() || cfg.max_sim_time_s.is_some_and(|m| rig.time_s() - sim_start >= m) {
             break;
@@ -124,7 +157,7 @@ pub async fn run(mut node: RosNode, cfg: VirtualRigNodeConfig, shutdown: Shutdow
             }
         };
         if cfg.clock == ClockMode::Realtime {
-            let due = wall_start + Duration::from_secs_f64(sample.runtime_s - sim_start);
+            let due = wall_start + Duration::from_secs_f64((sample.runtime_s - sim_start) / cfg.time_scale);
             tokio::select! {
                 _ = shutdown.wait() => break,
                 _ = tokio::time::sleep_until(due) => {}
