@@ -306,7 +306,7 @@ pub fn run_path(
 /// below the baseline. The calibration times cool-downs with this rule so its figures are the
 /// pauses a procedure on this rig would see. (The rule is restated here because `libs/` do not
 /// depend on `nodes/`: a change to the gate's `SpikeFilterConfig::default()` must be made here
-/// too.)
+/// too; `nodes/thermal/tests/release_rule_in_rigsim.rs` fails until it is.)
 #[derive(Debug, Clone, Default)]
 pub struct ReleaseFilter {
     samples: std::collections::VecDeque<(f64, f64)>,
