@@ -31,6 +31,22 @@ pub(crate) struct Inputs {
     pub omega: V,
 }
 
+impl Inputs {
+    /// Lane `i` as a scalar input (for the scalar fallbacks).
+    fn point(&self, i: usize) -> MfInput {
+        MfInput {
+            fz_n: self.fz.0[i],
+            kappa: self.kappa.0[i],
+            alpha_rad: self.alpha.0[i],
+            gamma_rad: self.gamma.0[i],
+            phit_per_m: self.phit.0[i],
+            vx_mps: self.vx.0[i],
+            p_pa: self.p.0[i],
+            omega_radps: self.omega.0[i],
+        }
+    }
+}
+
 /// One chunk of outputs (the fields of `MfOutput`, one lane per point).
 #[derive(Clone, Copy, Debug)]
 pub(crate) struct Outputs {
@@ -641,16 +657,7 @@ pub(crate) fn eval_chunk<const F: bool>(k: &Kernel<'_>, input: &Inputs, cache: &
 #[inline(never)]
 fn scalar_chunk(k: &Kernel<'_>, input: &Inputs) -> Outputs {
     let o: [MfOutput; L] = std::array::from_fn(|i| {
-        let x = MfInput {
-            fz_n: input.fz.0[i],
-            kappa: input.kappa.0[i],
-            alpha_rad: input.alpha.0[i],
-            gamma_rad: input.gamma.0[i],
-            phit_per_m: input.phit.0[i],
-            vx_mps: input.vx.0[i],
-            p_pa: input.p.0[i],
-            omega_radps: input.omega.0[i],
-        };
+        let x = input.point(i);
         evaluate_scaled(k.p, k.s, k.mode, &x)
     });
     macro_rules! lanes_of {
@@ -817,16 +824,7 @@ pub(crate) fn pure_fy_chunk<const F: bool>(k: &Kernel<'_>, input: &Inputs) -> V 
 #[inline(never)]
 fn scalar_pure_fy(k: &Kernel<'_>, input: &Inputs) -> V {
     V(std::array::from_fn(|i| {
-        let x = MfInput {
-            fz_n: input.fz.0[i],
-            kappa: input.kappa.0[i],
-            alpha_rad: input.alpha.0[i],
-            gamma_rad: input.gamma.0[i],
-            phit_per_m: input.phit.0[i],
-            vx_mps: input.vx.0[i],
-            p_pa: input.p.0[i],
-            omega_radps: input.omega.0[i],
-        };
+        let x = input.point(i);
         pure_fy(k.p, k.mode, &x)
     }))
 }

@@ -628,8 +628,13 @@ pub fn freerolling_setup(kind: SweepKind) -> SweepSetup {
         SweepKind::ConstantHigh => SlipPath::constant(28.0, 30.0),
         SweepKind::Variable => SlipPath::variable(28.0, 2.0, 30.0, 4.0),
     };
+    freerolling_sweep(format!("FreeRoll_{}", kind.name()), path)
+}
+
+/// A FreeRolling sweep at the comparison conditions (load, speed, pressure, camber 0°).
+fn freerolling_sweep(name: String, path: SlipPath) -> SweepSetup {
     SweepSetup {
-        name: format!("FreeRoll_{}", kind.name()),
+        name,
         axis: SweepAxis::Lateral,
         path,
         fz_n: FREEROLLING_LOAD_N,
@@ -1089,17 +1094,7 @@ fn radius_at_reference(rig: &mut VirtualRig) -> Result<f64, CalibrationError> {
 /// and high rates 6–30 °/s. The thesis measured 1.4 mm of wear over it (§3.6.2); that sets
 /// `wear.wear_mm_per_mj`.
 pub fn investigation_freerolling() -> Vec<SweepSetup> {
-    let mk = |name: String, path: SlipPath| SweepSetup {
-        name,
-        axis: SweepAxis::Lateral,
-        path,
-        fz_n: FREEROLLING_LOAD_N,
-        speed_mps: SPEED_MPS,
-        camber_deg: 0.0,
-        pressure_pa: PRESSURE_PA,
-        slip_angle_deg: 0.0,
-        load_coupling: None,
-    };
+    let mk = freerolling_sweep;
     let var = |lr: f64, hr: f64, th: f64| SlipPath::variable(28.0, lr, hr, th);
     let mut v = vec![mk("sw1".into(), var(4.0, 12.0, 4.0))];
     for r in [4.0, 6.0, 8.0, 10.0, 12.0, 14.0, 16.0, 18.0, 20.0, 25.0, 30.0] {
