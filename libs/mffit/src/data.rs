@@ -93,8 +93,9 @@ impl DataKind {
     }
 }
 
-/// One (resampled) sample. ISO-W axes, SI units, angles in radians.
-#[derive(Debug, Clone, Copy, PartialEq, Default, Serialize, Deserialize)]
+/// One (resampled) sample. ISO-W axes, SI units, angles in radians. The default is all zeros
+/// with the temperatures not recorded (NaN).
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 pub struct Sample {
     /// Time since the segment started, s.
     pub time_s: f64,
@@ -124,10 +125,97 @@ pub struct Sample {
     pub mz_nm: f64,
     /// DSTWOWHC (loaded radius), m.
     pub rl_m: f64,
-    /// Centre tread temperature, °C (NaN when not recorded).
+    /// Centre tread temperature (TRDTEMPC, TTC `TSTC`), °C (NaN when not recorded).
     pub temp_c: f64,
+    /// Inner tread temperature (TRDTEMPI, TTC `TSTI`), °C (NaN when not recorded).
+    pub temp_inner_c: f64,
+    /// Outer tread temperature (TRDTEMPO, TTC `TSTO`), °C (NaN when not recorded).
+    pub temp_outer_c: f64,
+    /// Road (belt) surface temperature (TTC `RST`), °C (NaN when not recorded).
+    pub road_temp_c: f64,
     /// Distance rolled (or belt travel) since the segment started, m (LONGDISP).
     pub dist_m: f64,
+}
+
+impl Default for Sample {
+    fn default() -> Self {
+        Sample {
+            time_s: 0.0,
+            fz_n: 0.0,
+            kappa: 0.0,
+            alpha_rad: 0.0,
+            gamma_rad: 0.0,
+            p_pa: 0.0,
+            vx_mps: 0.0,
+            omega_radps: 0.0,
+            fx_n: 0.0,
+            fy_n: 0.0,
+            mx_nm: 0.0,
+            my_nm: 0.0,
+            mz_nm: 0.0,
+            rl_m: 0.0,
+            temp_c: f64::NAN,
+            temp_inner_c: f64::NAN,
+            temp_outer_c: f64::NAN,
+            road_temp_c: f64::NAN,
+            dist_m: 0.0,
+        }
+    }
+}
+
+/// What a sweep of measured data is, judged from the channel that moves.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Serialize, Deserialize)]
+pub enum SweepKind {
+    /// Slip-angle sweep, free rolling (slip ratio zero).
+    Cornering,
+    /// Slip-ratio sweep at (nearly) zero slip angle.
+    DriveBrake,
+    /// Slip-ratio sweep at a held non-zero slip angle.
+    Combined,
+}
+
+impl SweepKind {
+    /// Name in reports (`cornering`, `drive/brake`, `combined`).
+    pub fn name(self) -> &'static str {
+        match self {
+            SweepKind::Cornering => "cornering",
+            SweepKind::DriveBrake => "drive/brake",
+            SweepKind::Combined => "combined",
+        }
+    }
+}
+
+/// The test cell a sweep of measured data was run at: the conditions held while the slip moved.
+/// Values are medians over the sweep, ISO-W, SI.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct Cell {
+    /// Kind of sweep.
+    pub kind: SweepKind,
+    /// Vertical load FZW, N.
+    pub fz_n: f64,
+    /// Inflation pressure, Pa.
+    pub p_pa: f64,
+    /// Inclination angle, rad.
+    pub gamma_rad: f64,
+    /// Held slip angle of a slip-ratio sweep, rad (0 for cornering sweeps).
+    pub alpha_rad: f64,
+    /// Held slip ratio of a slip-angle sweep (0 for free rolling).
+    pub kappa: f64,
+    /// Road speed, m/s.
+    pub vx_mps: f64,
+    /// Largest |slip| reached: slip angle in rad for cornering, slip ratio otherwise.
+    pub slip_reach: f64,
+}
+
+/// Where a segment came from in its source file, for messages a person can follow.
+#[derive(Debug, Clone, PartialEq, Eq, Serialize, Deserialize)]
+pub struct Origin {
+    /// Source file.
+    pub file: String,
+    /// First row of the segment (1-based line number of a text file, row index of a `.mat`).
+    pub first_row: usize,
+    /// Last row of the segment, inclusive.
+    pub last_row: usize,
 }
 
 /// A contiguous piece of one test: a sweep, a clump, a static test.
@@ -143,6 +231,13 @@ pub struct Segment {
     pub sweep: String,
     /// Samples in time order.
     pub samples: Vec<Sample>,
+    /// The test cell, when the segment comes from measured files whose cells were found from the
+    /// data (TTC, foreign TYDEX); `None` for GS2MF logs, whose procedure names say it.
+    #[serde(default)]
+    pub cell: Option<Cell>,
+    /// Where the segment sits in its source file, when it was read from one.
+    #[serde(default)]
+    pub origin: Option<Origin>,
 }
 
 /// Everything the fitter may use, plus what is known about the test.
@@ -200,7 +295,8 @@ pub fn resample(samples: &[Sample], period_s: f64) -> Vec<Sample> {
             return;
         }
         let n = acc.len() as f64;
-        let mut m = Sample::default();
+        // Temperatures too start from zero: a bin's mean is NaN only if a sample's is.
+        let mut m = Sample { temp_c: 0.0, temp_inner_c: 0.0, temp_outer_c: 0.0, road_temp_c: 0.0, ..Sample::default() };
         for s in acc.iter() {
             m.time_s += s.time_s / n;
             m.fz_n += s.fz_n / n;
@@ -217,6 +313,9 @@ pub fn resample(samples: &[Sample], period_s: f64) -> Vec<Sample> {
             m.mz_nm += s.mz_nm / n;
             m.rl_m += s.rl_m / n;
             m.temp_c += s.temp_c / n;
+            m.temp_inner_c += s.temp_inner_c / n;
+            m.temp_outer_c += s.temp_outer_c / n;
+            m.road_temp_c += s.road_temp_c / n;
             m.dist_m += s.dist_m / n;
         }
         out.push(m);

@@ -36,6 +36,6 @@ pub mod starts;
 pub mod synth;
 pub mod tydex;
 
-pub use data::{DataKind, Dataset, Procedure, Sample, Segment, ValidRange};
+pub use data::{Cell, DataKind, Dataset, Origin, Procedure, Sample, Segment, SweepKind, ValidRange};
 pub use error::FitError;
 pub use stages::{FitOptions, FitResult, fit};

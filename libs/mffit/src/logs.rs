@@ -47,6 +47,9 @@ pub fn sample_of(s: &RigSample) -> Sample {
         mz_nm: s.mzw_nm,
         rl_m: s.dstwowhc_m,
         temp_c: s.trdtempc_c,
+        temp_inner_c: s.trdtempi_c,
+        temp_outer_c: s.trdtempo_c,
+        road_temp_c: f64::NAN,
         dist_m: 0.0,
     }
 }
@@ -121,6 +124,8 @@ pub fn read_log(path: &Path) -> Result<Dataset, FitError> {
                     section: st.section.clone(),
                     sweep: st.sweep_name.clone(),
                     samples: Vec::new(),
+                    cell: None,
+                    origin: None,
                 });
             }
         }
@@ -173,9 +178,9 @@ pub fn rig_sample_of(s: &Sample, t_s: f64, seq: u64, procedure: Procedure) -> Ri
         trajvelw_mps: s.vx_mps,
         wheel_speed_radps: s.omega_radps,
         dstwowhc_m: s.rl_m,
-        trdtempi_c: s.temp_c,
+        trdtempi_c: if s.temp_inner_c.is_finite() { s.temp_inner_c } else { s.temp_c },
         trdtempc_c: s.temp_c,
-        trdtempo_c: s.temp_c,
+        trdtempo_c: if s.temp_outer_c.is_finite() { s.temp_outer_c } else { s.temp_c },
         rig_mode: match procedure {
             Procedure::FreeRolling => RigSetpoint::MODE_FREE_ROLLING,
             Procedure::BrkDrv => RigSetpoint::MODE_COUPLED,

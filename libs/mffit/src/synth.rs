@@ -135,6 +135,9 @@ impl Gen<'_> {
             mz_nm: o.mz_nm + self.n(nz.moment_nm * gm),
             rl_m: rl,
             temp_c: 45.0,
+            temp_inner_c: 45.0,
+            temp_outer_c: 45.0,
+            road_temp_c: f64::NAN,
             dist_m: dist,
         }
     }
@@ -168,7 +171,7 @@ fn asym(alpha_deg: f64, hi: f64, lo: f64) -> f64 {
 }
 
 fn segment(procedure: Procedure, kind: DataKind, section: &str, sweep: String, samples: Vec<Sample>) -> Segment {
-    Segment { procedure, kind, section: section.into(), sweep, samples }
+    Segment { procedure, kind, section: section.into(), sweep, samples, cell: None, origin: None }
 }
 
 /// Generates a full GS2MF-like dataset (FreeRolling, BrkDrv, StaticLong) from `tyre`.

@@ -236,7 +236,7 @@ pub fn parse_tydex(text: &str, path: &Path) -> Result<Dataset, FitError> {
                         format!("{} values, expected {} (one per channel)", vals.len(), chans.len()),
                     ));
                 }
-                let mut s = Sample { temp_c: f64::NAN, ..Sample::default() };
+                let mut s = Sample::default();
                 let mut seg = 0usize;
                 for ((name, (k, off), factor), v) in chans.iter().zip(vals) {
                     let v = v * factor;
@@ -270,7 +270,7 @@ pub fn parse_tydex(text: &str, path: &Path) -> Result<Dataset, FitError> {
                 "tydex".into(),
                 format!("segment_{i}"),
             ));
-            Segment { procedure, kind, section, sweep, samples: Vec::new() }
+            Segment { procedure, kind, section, sweep, samples: Vec::new(), cell: None, origin: None }
         })
         .collect();
     for (i, s) in rows {
@@ -377,6 +377,9 @@ pub fn parse_ttc(text: &str, path: &Path, convention: Convention) -> Result<Data
             mz_nm: sg * get(&vals, c_mz, 0.0),
             rl_m: get(&vals, c_rl, 0.0),
             temp_c: get(&vals, c_t, f64::NAN),
+            temp_inner_c: f64::NAN,
+            temp_outer_c: f64::NAN,
+            road_temp_c: f64::NAN,
             dist_m: 0.0,
         });
     }
@@ -394,6 +397,8 @@ pub fn parse_ttc(text: &str, path: &Path, convention: Convention) -> Result<Data
                 section: "ttc".into(),
                 sweep: format!("ttc_sweep_{n}"),
                 samples: std::mem::take(cur),
+                cell: None,
+                origin: None,
             });
         }
         cur.clear();
