@@ -56,6 +56,15 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             s.notes,
             s.skipped.as_deref().map(|r| format!(" SKIPPED {r}")).unwrap_or_default()
         );
+        if let Some(h) = &s.heldout {
+            eprintln!(
+                "    k-fold: held-out {:.2} % of peak (fit {:.2} %) over {} sweeps",
+                h.nrmse_pct, h.fit_nrmse_pct, h.sweeps
+            );
+        }
+        for h in &s.held {
+            eprintln!("    held {} = {}: {}", h.key, h.value, h.reason);
+        }
     }
     eprintln!("warnings: {:?}", result.warnings);
     let support = mffit::accuracy::Support::of_fit(&result);

@@ -98,6 +98,31 @@ pub struct ChannelProblem<'a> {
     pub diff_step: f64,
     /// Worker threads for residuals and Jacobian columns.
     pub threads: usize,
+    /// Physical margins added as penalty residuals (see [`crate::physics`]), if any.
+    pub penalty: Option<Penalty<'a>>,
+    /// Number of penalty residuals (fixed for a grid).
+    penalty_count: usize,
+}
+
+/// Penalty residuals: `weight × shortfall` of each margin of `set` on `grid`, appended after the
+/// data residuals. They are zero while the model is physical, so they change nothing there;
+/// outside, they pull the optimiser back (a fit stays physical by construction).
+#[derive(Debug, Clone, Copy)]
+pub struct Penalty<'a> {
+    /// The margins.
+    pub set: crate::physics::MarginSet,
+    /// Where they are checked.
+    pub grid: &'a crate::physics::Grid,
+    /// Residual per unit of shortfall (residual units: % of the channel's peak).
+    pub weight: f64,
+}
+
+impl Penalty<'_> {
+    /// Weight for `points` data residuals: a shortfall of 0.01 (in μ, E or G) costs as much as
+    /// raising every data residual by about 3 % of the peak, far more than any fit gains.
+    pub fn weight_for(points: usize) -> f64 {
+        30.0 * (points.max(1) as f64).sqrt()
+    }
 }
 
 impl<'a> ChannelProblem<'a> {
@@ -110,7 +135,40 @@ impl<'a> ChannelProblem<'a> {
         scale: f64,
     ) -> Self {
         let threads = std::thread::available_parallelism().map(|n| n.get()).unwrap_or(1);
-        Self { base, keys, points, channel, scale, diff_step: f64::EPSILON.cbrt(), threads }
+        Self {
+            base,
+            keys,
+            points,
+            channel,
+            scale,
+            diff_step: f64::EPSILON.cbrt(),
+            threads,
+            penalty: None,
+            penalty_count: 0,
+        }
+    }
+
+    /// Adds physical margins as penalty residuals.
+    pub fn with_penalty(mut self, penalty: Penalty<'a>) -> Self {
+        let mut v = Vec::new();
+        crate::physics::shortfalls(self.base, penalty.set, penalty.grid, &mut v);
+        self.penalty_count = v.len();
+        self.penalty = Some(penalty);
+        self
+    }
+
+    fn num_penalties(&self) -> usize {
+        self.penalty_count
+    }
+
+    fn penalties_into(&self, t: &TyreParams, out: &mut [f64]) {
+        if let Some(pen) = &self.penalty {
+            let mut v = Vec::with_capacity(out.len());
+            crate::physics::shortfalls(t, pen.set, pen.grid, &mut v);
+            for (o, x) in out.iter_mut().zip(v) {
+                *o = pen.weight * x;
+            }
+        }
     }
 
     /// `base` with the parameter vector written into `keys`.
@@ -167,17 +225,20 @@ pub fn values_of(params: &TyreParams, keys: &[&str]) -> Vec<f64> {
 
 impl lsq::Problem for ChannelProblem<'_> {
     fn num_residuals(&self) -> usize {
-        self.points.len()
+        self.points.len() + self.num_penalties()
     }
 
     fn residuals(&self, p: &DVector<f64>, r: &mut DVector<f64>) {
         let t = self.params_at(p);
-        self.residuals_parallel(&t, r.as_mut_slice());
+        let (data, pen) = r.as_mut_slice().split_at_mut(self.points.len());
+        self.residuals_parallel(&t, data);
+        self.penalties_into(&t, pen);
     }
 
     fn jacobian(&self, p: &DVector<f64>, j: &mut DMatrix<f64>) -> bool {
         let n = p.len();
-        let m = self.points.len();
+        let m = self.points.len() + self.num_penalties();
+        let md = self.points.len();
         let threads = self.threads.max(1).min(n);
         // Columns are contiguous in nalgebra's column-major storage: hand each worker its own.
         let cols: Vec<&mut [f64]> = j.as_mut_slice().chunks_mut(m).collect();
@@ -194,9 +255,13 @@ impl lsq::Problem for ChannelProblem<'_> {
                         let h = self.step(p[c]);
                         let mut pp = p.clone();
                         pp[c] = p[c] + h;
-                        self.residuals_into(&self.params_at(&pp), &mut plus);
+                        let t = self.params_at(&pp);
+                        self.residuals_into(&t, &mut plus[..md]);
+                        self.penalties_into(&t, &mut plus[md..]);
                         pp[c] = p[c] - h;
-                        self.residuals_into(&self.params_at(&pp), &mut minus);
+                        let t = self.params_at(&pp);
+                        self.residuals_into(&t, &mut minus[..md]);
+                        self.penalties_into(&t, &mut minus[md..]);
                         let inv = 1.0 / (2.0 * h);
                         for i in 0..m {
                             col[i] = (plus[i] - minus[i]) * inv;

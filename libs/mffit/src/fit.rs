@@ -4,7 +4,7 @@ use lsq::{Loss, Options};
 use mftyre::TyreParams;
 use nalgebra::DVector;
 
-use crate::engine::{Channel, ChannelProblem, Point, apply, bounds_for, values_of};
+use crate::engine::{Channel, ChannelProblem, Penalty, Point, apply, bounds_for, values_of};
 use crate::error::FitError;
 
 /// What one step did.
@@ -54,6 +54,21 @@ pub fn fit_step(
     scale: f64,
     settings: &StepSettings,
 ) -> Result<StepOutcome, FitError> {
+    fit_step_with(stage, params, keys, points, channel, scale, settings, None)
+}
+
+/// [`fit_step`] with physical margins as penalty residuals ([`Penalty`]).
+#[allow(clippy::too_many_arguments)] // fit_step's arguments plus the penalty
+pub fn fit_step_with(
+    stage: &str,
+    params: &mut TyreParams,
+    keys: &[&'static str],
+    points: &[Point],
+    channel: Channel,
+    scale: f64,
+    settings: &StepSettings,
+    penalty: Option<Penalty<'_>>,
+) -> Result<StepOutcome, FitError> {
     if points.len() <= keys.len() {
         return Err(FitError::NotEnoughData { stage: stage.to_owned(), points: points.len(), needed: keys.len() + 1 });
     }
@@ -64,6 +79,9 @@ pub fn fit_step(
     }
     let mut problem = ChannelProblem::new(params, keys, points, channel, scale.max(1e-12));
     problem.threads = settings.threads.max(1);
+    if let Some(pen) = penalty {
+        problem = problem.with_penalty(pen);
+    }
     let mut options = Options::default()
         .max_iterations(settings.max_iterations)
         .ftol(1e-8)

@@ -1,0 +1,439 @@
+//! Which coefficients a stage's data can identify, and how well the fit determines them.
+//!
+//! A real test seldom covers everything MF-Tyre 6.1 can describe: a cornering run at camber 0
+//! says nothing about camber thrust, a drive/brake run at one pressure nothing about pressure.
+//! Fitting such a coefficient anyway fits noise (or another effect) into it, and the model then
+//! extrapolates that noise. So before a stage fits, its candidate keys are judged in two ways,
+//! and only those that pass are freed; the others keep their template values and the report
+//! says why:
+//!
+//! 1. **Structure** — what the coefficient multiplies must vary in the data: a load term needs
+//!    two load levels (a quadratic one three), a camber term two cambers, a pressure term two
+//!    pressures (quadratic: three), a speed term two speeds ([`need`], [`Levels`]).
+//! 2. **The Jacobian** — at the stage's start, the residuals' sensitivity to each key, columns
+//!    normalised, taken in the stage's priority order (nominal terms first): a key whose column
+//!    is (numerically) a combination of the keys already accepted cannot be told apart from them
+//!    by this data (variance inflation above [`MAX_VIF`]), and is held ([`identify`]).
+//!
+//! After the fit, [`uncertainty`] gives each fitted coefficient a standard deviation from the
+//! Jacobian at the solution and the residual variance: cov = s²·(JᵀJ)⁻¹, with s² the residual
+//! variance and an inflation for serially correlated residuals (the data are time series: the
+//! residual of a 10 Hz point is much like its neighbour's, so there are fewer independent
+//! points than rows). The figures describe the spread over repeats of the same test; model-form
+//! error is visible in the k-fold held-out error, not here.
+
+use std::collections::BTreeMap;
+
+use mftyre::TyreParams;
+use nalgebra::{DMatrix, DVector};
+use serde::Serialize;
+
+use crate::engine::{Channel, ChannelProblem, Point, bounds_for, values_of};
+
+/// A key whose variance inflation (1/(1 − R²) against the keys accepted before it) exceeds this
+/// is held: at 10⁶ the data determine it a thousand times worse than an orthogonal one.
+pub const MAX_VIF: f64 = 1.0e6;
+
+/// Distinct operating levels present in a stage's points.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct Levels {
+    /// Load levels (clustered to 8 % of Fz0), N.
+    pub loads_n: Vec<f64>,
+    /// Pressure levels (clustered to 5 kPa), Pa.
+    pub pressures_pa: Vec<f64>,
+    /// Camber levels (clustered to 0.5°), rad.
+    pub cambers_rad: Vec<f64>,
+    /// Speed levels (clustered to 2 m/s), m/s.
+    pub speeds_mps: Vec<f64>,
+}
+
+/// Levels of `values` with tolerance `tol`, from a histogram of bins `tol/2` wide: a bin is
+/// occupied when it holds at least 5 values and 0.2 % of them, so ramps and stray samples
+/// between levels (a few per bin) do not count; runs of occupied bins are groups, and a group
+/// counts one level per `tol` it spans (a held level with sensor noise spans one; a load that
+/// varies continuously within every sweep spans many).
+fn clusters(values: impl Iterator<Item = f64>, tol: f64) -> Vec<f64> {
+    let v: Vec<f64> = values.filter(|x| x.is_finite()).collect();
+    if v.is_empty() || tol.is_nan() || tol <= 0.0 {
+        return Vec::new();
+    }
+    let lo = v.iter().copied().fold(f64::INFINITY, f64::min);
+    let hi = v.iter().copied().fold(f64::NEG_INFINITY, f64::max);
+    let w = tol / 2.0;
+    // Bound the histogram: a range of more than 10,000 bins is no levelled test.
+    let nbins = (((hi - lo) / w).floor() as usize + 1).min(10_000);
+    let w = if nbins == 10_000 { (hi - lo) / 9_999.0 } else { w };
+    let mut count = vec![0usize; nbins];
+    for x in &v {
+        let b = (((x - lo) / w.max(1e-300)).floor() as usize).min(nbins - 1);
+        count[b] += 1;
+    }
+    let min_count = (v.len() / 500).max(5);
+    let mut out = Vec::new();
+    let mut b = 0;
+    while b < nbins {
+        if count[b] < min_count {
+            b += 1;
+            continue;
+        }
+        let first = b;
+        while b < nbins && count[b] >= min_count {
+            b += 1;
+        }
+        let (a, z) = (lo + first as f64 * w, lo + b as f64 * w);
+        let n = (((z - a) - w) / tol).floor().max(0.0) as usize + 1;
+        for k in 0..n {
+            out.push(a + (z - a) * (k as f64 + 0.5) / n as f64);
+        }
+    }
+    out
+}
+
+impl Levels {
+    /// The levels of `points`, with the nominal load `fz0_n` setting the load tolerance.
+    pub fn of(points: &[Point], fz0_n: f64) -> Self {
+        Levels {
+            loads_n: clusters(points.iter().map(|p| p.input.fz_n), 0.08 * fz0_n.max(1.0)),
+            pressures_pa: clusters(points.iter().map(|p| p.input.p_pa), 5e3),
+            cambers_rad: clusters(points.iter().map(|p| p.input.gamma_rad), 0.5f64.to_radians()),
+            speeds_mps: clusters(points.iter().map(|p| p.input.vx_mps), 2.0),
+        }
+    }
+
+    fn describe(&self, what: Dim) -> String {
+        let list = |v: &[f64], f: &dyn Fn(f64) -> String| v.iter().map(|x| f(*x)).collect::<Vec<_>>().join(", ");
+        match what {
+            Dim::Load => {
+                format!("{} load level(s) ({})", self.loads_n.len(), list(&self.loads_n, &|x| format!("{x:.0} N")))
+            }
+            Dim::Pressure => format!(
+                "{} pressure level(s) ({})",
+                self.pressures_pa.len(),
+                list(&self.pressures_pa, &|x| format!("{:.0} kPa", x / 1e3))
+            ),
+            Dim::Camber => format!(
+                "{} camber level(s) ({})",
+                self.cambers_rad.len(),
+                list(&self.cambers_rad, &|x| format!("{:.1} deg", x.to_degrees()))
+            ),
+            Dim::Speed => format!(
+                "{} speed level(s) ({})",
+                self.speeds_mps.len(),
+                list(&self.speeds_mps, &|x| format!("{x:.1} m/s"))
+            ),
+        }
+    }
+
+    fn count(&self, what: Dim) -> usize {
+        match what {
+            Dim::Load => self.loads_n.len(),
+            Dim::Pressure => self.pressures_pa.len(),
+            Dim::Camber => self.cambers_rad.len(),
+            Dim::Speed => self.speeds_mps.len(),
+        }
+    }
+}
+
+/// An operating variable a coefficient's effect depends on.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Dim {
+    /// Vertical load (dfz terms).
+    Load,
+    /// Inflation pressure (dpi terms).
+    Pressure,
+    /// Inclination angle (γ terms).
+    Camber,
+    /// Speed (Ω, V terms).
+    Speed,
+}
+
+/// How many distinct levels of which variables a coefficient needs to be identifiable, from the
+/// MF-Tyre 6.1 equations: e.g. PDY2 multiplies dfz (2 loads), PEX3 multiplies dfz² (3 loads),
+/// PKY4 shapes Kyα(Fz) beyond its slope (3 loads), PPY4 multiplies dpi² (3 pressures).
+pub fn need(key: &str) -> &'static [(Dim, usize)] {
+    use Dim::*;
+    match key {
+        // Lateral, pure.
+        "PDY2" | "PEY2" | "PHY2" | "PVY2" | "PKY2" => &[(Load, 2)],
+        "PKY4" => &[(Load, 3)],
+        "PDY3" | "PEY4" | "PEY5" | "PKY3" | "PKY5" | "PKY6" | "PVY3" => &[(Camber, 2)],
+        "PKY7" | "PVY4" => &[(Camber, 2), (Load, 2)],
+        "PPY1" | "PPY3" => &[(Pressure, 2)],
+        "PPY2" => &[(Pressure, 2), (Load, 2)],
+        "PPY4" => &[(Pressure, 3)],
+        "PPY5" => &[(Pressure, 2), (Camber, 2)],
+        // Longitudinal, pure.
+        "PDX2" | "PEX2" | "PKX2" | "PHX2" | "PVX2" => &[(Load, 2)],
+        "PEX3" | "PKX3" => &[(Load, 3)],
+        "PDX3" => &[(Camber, 2)],
+        "PPX1" | "PPX3" => &[(Pressure, 2)],
+        "PPX2" | "PPX4" => &[(Pressure, 3)],
+        // Aligning, pure.
+        "QBZ2" | "QDZ2" | "QDZ7" | "QEZ2" | "QHZ2" => &[(Load, 2)],
+        "QBZ3" | "QEZ3" => &[(Load, 3)],
+        "QBZ4" | "QBZ5" | "QDZ3" | "QDZ4" | "QDZ8" | "QDZ10" | "QEZ5" | "QHZ3" => &[(Camber, 2)],
+        "QDZ9" | "QDZ11" | "QHZ4" => &[(Camber, 2), (Load, 2)],
+        "PPZ1" | "PPZ2" => &[(Pressure, 2)],
+        // Combined.
+        "REX2" | "REY2" | "RHY2" | "RVY2" => &[(Load, 2)],
+        "RBX3" | "RBY4" | "RVY3" | "SSZ3" => &[(Camber, 2)],
+        "SSZ4" => &[(Camber, 2), (Load, 2)],
+        // Overturning.
+        "QSX2" | "QSX7" | "QSX10" | "QSX12" | "QSX14" => &[(Camber, 2)],
+        "PPMX1" => &[(Camber, 2), (Pressure, 2)],
+        // Vertical.
+        "Q_FZ2" => &[(Load, 3)],
+        "PFZ1" => &[(Pressure, 2)],
+        "Q_V1" | "Q_V2" => &[(Speed, 2)],
+        "Q_CAM" => &[(Camber, 2)],
+        "BREFF" | "DREFF" | "FREFF" => &[(Load, 3)],
+        "PCFX1" | "PCFX2" | "PCFY1" | "PCFY2" => &[(Load, 2)],
+        "PCFX3" | "PCFY3" => &[(Pressure, 2)],
+        _ => &[],
+    }
+}
+
+/// A coefficient a stage did not fit, with the reason.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct Held {
+    /// `.tir` key.
+    pub key: String,
+    /// Value it keeps (the template's, or what an earlier stage set).
+    pub value: f64,
+    /// Why, in words a tyre engineer can act on.
+    pub reason: String,
+}
+
+/// The verdict on a stage's candidate keys.
+#[derive(Debug, Clone, PartialEq, Default)]
+pub struct Identification {
+    /// Keys the data identify, in priority order.
+    pub free: Vec<&'static str>,
+    /// Keys held, with reasons.
+    pub held: Vec<Held>,
+}
+
+/// Keys the structure of the data rules out (too few levels of what they multiply).
+pub fn structural(params: &TyreParams, keys: &[&'static str], levels: &Levels) -> Identification {
+    let mut out = Identification::default();
+    for &k in keys {
+        let missing: Vec<String> = need(k)
+            .iter()
+            .filter(|(d, n)| levels.count(*d) < *n)
+            .map(|(d, n)| format!("needs {n} levels, the data have {}", levels.describe(*d)))
+            .collect();
+        if missing.is_empty() {
+            out.free.push(k);
+        } else {
+            out.held.push(Held { key: k.into(), value: params.get(k).unwrap_or(0.0), reason: missing.join("; ") });
+        }
+    }
+    out
+}
+
+/// The Jacobian (data residuals only, in channel units per unit coefficient) of `channel` over
+/// `points` with respect to `keys`, at `params` (values clamped into their fitting bounds).
+fn jacobian(
+    params: &TyreParams,
+    keys: &[&'static str],
+    points: &[Point],
+    channel: Channel,
+    threads: usize,
+) -> DMatrix<f64> {
+    let mut problem = ChannelProblem::new(params, keys, points, channel, 1.0);
+    problem.threads = threads.max(1);
+    let p: Vec<f64> = values_of(params, keys)
+        .iter()
+        .zip(keys)
+        .map(|(v, k)| {
+            let (lo, hi) = bounds_for(k);
+            v.clamp(lo, hi)
+        })
+        .collect();
+    let mut j = DMatrix::zeros(points.len(), keys.len());
+    lsq::Problem::jacobian(&problem, &DVector::from_vec(p), &mut j);
+    j
+}
+
+/// Judges `keys` (already structurally possible) by the Jacobian: in priority order, a key is
+/// accepted unless its normalised column is (within 1/[`MAX_VIF`]) in the span of the columns
+/// accepted before it, or has no effect at all on these points.
+pub fn by_jacobian(
+    params: &TyreParams,
+    keys: &[&'static str],
+    points: &[Point],
+    channel: Channel,
+    threads: usize,
+) -> Identification {
+    let mut out = Identification::default();
+    if keys.is_empty() || points.is_empty() {
+        return out;
+    }
+    let j = jacobian(params, keys, points, channel, threads);
+    let norms: Vec<f64> = (0..keys.len()).map(|c| j.column(c).norm()).collect();
+    let biggest = norms.iter().copied().filter(|x| x.is_finite()).fold(0.0, f64::max);
+    // Orthonormal basis of the accepted columns (modified Gram–Schmidt, twice for accuracy).
+    let mut basis: Vec<DVector<f64>> = Vec::new();
+    let mut basis_keys: Vec<&'static str> = Vec::new();
+    let min_fraction = 1.0 / MAX_VIF.sqrt();
+    for (c, &k) in keys.iter().enumerate() {
+        let value = params.get(k).unwrap_or(0.0);
+        if !norms[c].is_finite() {
+            out.held.push(Held { key: k.into(), value, reason: "the model is not finite around its start".into() });
+            continue;
+        }
+        if norms[c] <= 1e-12 * biggest.max(1e-300) {
+            out.held.push(Held { key: k.into(), value, reason: "no effect on this data (zero sensitivity)".into() });
+            continue;
+        }
+        let col = j.column(c) / norms[c];
+        let mut r = col.clone();
+        for _ in 0..2 {
+            for q in &basis {
+                let d = q.dot(&r);
+                r -= q * d;
+            }
+        }
+        let fraction = r.norm();
+        if fraction < min_fraction {
+            // Name the accepted keys it is most alike.
+            let mut alike: Vec<(f64, &str)> = basis_keys
+                .iter()
+                .enumerate()
+                .map(|(i, bk)| {
+                    let ci = keys.iter().position(|x| x == bk).unwrap_or(i);
+                    ((j.column(ci) / norms[ci]).dot(&col).abs(), *bk)
+                })
+                .collect();
+            alike.sort_by(|a, b| b.0.total_cmp(&a.0));
+            let names: Vec<&str> = alike.iter().take(3).map(|a| a.1).collect();
+            out.held.push(Held {
+                key: k.into(),
+                value,
+                reason: format!(
+                    "cannot be told apart from {} in this data (variance inflation {:.1e})",
+                    names.join(", "),
+                    1.0 / (fraction * fraction).max(1e-300)
+                ),
+            });
+            continue;
+        }
+        basis.push(r / fraction);
+        basis_keys.push(k);
+        out.free.push(k);
+    }
+    out
+}
+
+/// One fitted coefficient's estimate.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct Estimate {
+    /// `.tir` key.
+    pub key: String,
+    /// Fitted value.
+    pub value: f64,
+    /// Standard deviation (1σ), same units; NaN when the covariance is singular.
+    pub std: f64,
+}
+
+/// Standard deviations of the fitted `keys` at the solution `params`.
+///
+/// `groups[i]` is the segment (sweep) of `points[i]`; consecutive points of one group are a time
+/// series, whose lag-1 autocorrelation ρ of the residuals inflates the variance by (1+ρ)/(1−ρ)
+/// (the effective number of independent points, clamped to at most 50×).
+pub fn uncertainty(
+    params: &TyreParams,
+    keys: &[&'static str],
+    points: &[Point],
+    groups: &[usize],
+    channel: Channel,
+    threads: usize,
+) -> (Vec<Estimate>, f64) {
+    let n = keys.len();
+    let m = points.len();
+    let nan = |k: &&str| Estimate { key: (*k).into(), value: params.get(k).unwrap_or(f64::NAN), std: f64::NAN };
+    if n == 0 || m <= n {
+        return (keys.iter().map(nan).collect(), 1.0);
+    }
+    let res: Vec<f64> = points.iter().map(|p| channel.eval(params, &p.input) - p.measured).collect();
+    let ssr: f64 = res.iter().map(|r| r * r).sum();
+    let s2 = ssr / (m - n) as f64;
+    let inflation = serial_inflation(&res, groups);
+    let j = jacobian(params, keys, points, channel, threads);
+    let svd = j.svd(false, true);
+    let (Some(vt), sv) = (svd.v_t.as_ref(), &svd.singular_values) else {
+        return (keys.iter().map(nan).collect(), inflation);
+    };
+    let smax = sv.iter().copied().fold(0.0, f64::max);
+    let estimates = (0..n)
+        .map(|c| {
+            // Var(p_c) = s²·Σ_k V[c,k]² / σ_k²; a (numerically) zero σ_k makes it unbounded.
+            let mut var = 0.0;
+            for k in 0..sv.len() {
+                let v = vt[(k, c)];
+                if sv[k] <= 1e-13 * smax {
+                    if v.abs() > 1e-9 {
+                        var = f64::INFINITY;
+                    }
+                    continue;
+                }
+                var += v * v / (sv[k] * sv[k]);
+            }
+            Estimate {
+                key: keys[c].into(),
+                value: params.get(keys[c]).unwrap_or(f64::NAN),
+                std: (s2 * inflation * var).sqrt(),
+            }
+        })
+        .collect();
+    (estimates, inflation)
+}
+
+/// (1+ρ)/(1−ρ) from the lag-1 autocorrelation of residuals within groups, in [1, 50].
+fn serial_inflation(res: &[f64], groups: &[usize]) -> f64 {
+    let mut by_group: BTreeMap<usize, Vec<f64>> = BTreeMap::new();
+    for (r, g) in res.iter().zip(groups) {
+        by_group.entry(*g).or_default().push(*r);
+    }
+    let (mut num, mut den) = (0.0, 0.0);
+    for v in by_group.values() {
+        if v.len() < 3 {
+            continue;
+        }
+        let mean = v.iter().sum::<f64>() / v.len() as f64;
+        for w in v.windows(2) {
+            num += (w[0] - mean) * (w[1] - mean);
+        }
+        den += v.iter().map(|x| (x - mean) * (x - mean)).sum::<f64>();
+    }
+    if den <= 0.0 {
+        return 1.0;
+    }
+    let rho = (num / den).clamp(0.0, 0.96);
+    ((1.0 + rho) / (1.0 - rho)).clamp(1.0, 50.0)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn clusters_find_levels_and_ignore_ramps() {
+        let mut v: Vec<f64> = Vec::new();
+        for level in [220.0, 660.0, 1100.0] {
+            v.extend(std::iter::repeat_n(level, 200));
+        }
+        // A ramp between levels: a few samples each.
+        v.extend((0..40).map(|i| 660.0 + i as f64 * 11.0));
+        let c = clusters(v.into_iter(), 80.0);
+        assert_eq!(c.len(), 3, "{c:?}");
+    }
+
+    #[test]
+    fn serial_inflation_is_one_for_white_and_large_for_smooth_residuals() {
+        let white: Vec<f64> = (0..400).map(|i| if i % 2 == 0 { 1.0 } else { -1.0 }).collect();
+        assert!((serial_inflation(&white, &vec![0; 400]) - 1.0).abs() < 1e-9);
+        let smooth: Vec<f64> = (0..400).map(|i| (i as f64 / 40.0).sin()).collect();
+        assert!(serial_inflation(&smooth, &vec![0; 400]) > 20.0);
+    }
+}

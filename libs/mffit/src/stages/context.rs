@@ -1,0 +1,205 @@
+//! What every stage works with: the data, the options, the nominal values, and the selection of
+//! a stage's points (resampled per segment, decimated evenly, each tagged with its segment so
+//! k-fold validation can hold out whole sweeps).
+
+use mftyre::MfInput;
+
+use crate::data::{DataKind, Dataset, Procedure, Sample, Segment, resample};
+use crate::engine::Point;
+use crate::fit::StepSettings;
+use crate::physics::Grid;
+use crate::stages::{FitOptions, Nominal};
+
+/// A stage's context.
+#[derive(Debug)]
+pub struct Ctx<'a> {
+    /// All data of the fit.
+    pub data: &'a Dataset,
+    /// Options.
+    pub opts: &'a FitOptions,
+    /// Stage 0's nominal values.
+    pub nominal: Nominal,
+    /// Optimiser settings.
+    pub settings: StepSettings,
+    /// The tested range's grid, where physical margins are checked.
+    pub grid: Grid,
+}
+
+/// A stage's points and the segment (index into the dataset) each came from.
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct StagePoints {
+    /// Points.
+    pub points: Vec<Point>,
+    /// `groups[i]` = the segment of `points[i]`.
+    pub groups: Vec<usize>,
+}
+
+impl StagePoints {
+    /// Number of points.
+    pub fn len(&self) -> usize {
+        self.points.len()
+    }
+
+    /// True without points.
+    pub fn is_empty(&self) -> bool {
+        self.points.is_empty()
+    }
+
+    /// The points satisfying `keep`, with their groups.
+    pub fn filter(&self, keep: impl Fn(&Point) -> bool) -> StagePoints {
+        let mut out = StagePoints::default();
+        for (p, g) in self.points.iter().zip(&self.groups) {
+            if keep(p) {
+                out.points.push(*p);
+                out.groups.push(*g);
+            }
+        }
+        out
+    }
+
+    /// The points whose group satisfies `keep`.
+    pub fn by_group(&self, keep: impl Fn(usize) -> bool) -> StagePoints {
+        let mut out = StagePoints::default();
+        for (p, g) in self.points.iter().zip(&self.groups) {
+            if keep(*g) {
+                out.points.push(*p);
+                out.groups.push(*g);
+            }
+        }
+        out
+    }
+
+    /// Appends another selection.
+    pub fn extend(&mut self, other: StagePoints) {
+        self.points.extend(other.points);
+        self.groups.extend(other.groups);
+    }
+
+    /// Evenly decimated to at most `max` points (groups kept aligned).
+    pub fn decimated(self, max: usize) -> StagePoints {
+        let n = self.points.len();
+        if n <= max || max == 0 {
+            return self;
+        }
+        let step = n as f64 / max as f64;
+        let idx: Vec<usize> = (0..max).map(|i| ((i as f64 * step) as usize).min(n - 1)).collect();
+        StagePoints {
+            points: idx.iter().map(|&i| self.points[i]).collect(),
+            groups: idx.iter().map(|&i| self.groups[i]).collect(),
+        }
+    }
+
+    /// Distinct groups, in order of first appearance.
+    pub fn distinct_groups(&self) -> Vec<usize> {
+        let mut seen = Vec::new();
+        for g in &self.groups {
+            if !seen.contains(g) {
+                seen.push(*g);
+            }
+        }
+        seen
+    }
+}
+
+/// True for force & moment data: sweeps and on-centre clumps (graph sweeps only when asked).
+pub fn is_fm(seg: &Segment, opts: &FitOptions) -> bool {
+    matches!(seg.kind, DataKind::Sweep | DataKind::OnCentre)
+        || (opts.include_graph_sweeps && seg.kind == DataKind::GraphSweep)
+}
+
+/// The model input of a sample. Free rolling: the wheel is not driven, the slip ratio is zero by
+/// construction (the rig's reported value is noise around it).
+pub fn input_of(s: &Sample, free_rolling: bool) -> MfInput {
+    MfInput {
+        fz_n: s.fz_n,
+        kappa: if free_rolling { 0.0 } else { s.kappa },
+        alpha_rad: s.alpha_rad,
+        gamma_rad: s.gamma_rad,
+        phit_per_m: 0.0,
+        vx_mps: s.vx_mps,
+        p_pa: s.p_pa,
+        omega_radps: s.omega_radps,
+    }
+}
+
+impl Ctx<'_> {
+    /// Resampling period of a segment: 10 Hz for free rolling (the thesis's rate); finer for
+    /// BrkDrv, whose slip-ratio sweeps cross the peak in a fraction of a second.
+    pub fn period_of(&self, seg: &Segment) -> f64 {
+        if seg.procedure == Procedure::BrkDrv { self.opts.brkdrv_period_s } else { self.opts.resample_period_s }
+    }
+
+    /// Samples of the segments matching `keep_seg` that satisfy `keep`, resampled per segment,
+    /// as points measuring `measured`, evenly decimated to `max`.
+    pub fn points(
+        &self,
+        keep_seg: impl Fn(&Segment) -> bool,
+        keep: impl Fn(&Sample) -> bool,
+        measured: impl Fn(&Sample) -> f64,
+        max: usize,
+    ) -> StagePoints {
+        let mut out = StagePoints::default();
+        for (i, seg) in self.data.segments.iter().enumerate().filter(|(_, s)| keep_seg(s)) {
+            let free = seg.procedure == Procedure::FreeRolling;
+            for s in resample(&seg.samples, self.period_of(seg)).iter().filter(|s| keep(s) && s.fz_n > 50.0) {
+                let m = measured(s);
+                if m.is_finite() && s.fz_n.is_finite() && s.alpha_rad.is_finite() && s.kappa.is_finite() {
+                    out.points.push(Point { input: input_of(s, free), measured: m });
+                    out.groups.push(i);
+                }
+            }
+        }
+        out.decimated(max)
+    }
+
+    /// Per segment matching `keep_seg`, its resampled points (for starting values: peaks,
+    /// crossings).
+    pub fn segment_points(&self, keep_seg: impl Fn(&Segment) -> bool, measured: fn(&Sample) -> f64) -> Vec<Vec<Point>> {
+        self.data
+            .segments
+            .iter()
+            .filter(|s| keep_seg(s))
+            .map(|seg| {
+                let free = seg.procedure == Procedure::FreeRolling;
+                resample(&seg.samples, self.period_of(seg))
+                    .iter()
+                    .filter(|s| s.fz_n > 50.0)
+                    .map(|s| Point { input: input_of(s, free), measured: measured(s) })
+                    .collect()
+            })
+            .collect()
+    }
+
+    /// Noise floor of a channel from consecutive resampled samples at (nearly) the same
+    /// operating point: σ ≈ median|Δ| / (0.6745·√2).
+    pub fn noise_floor(&self, keep_seg: impl Fn(&Segment) -> bool, measured: fn(&Sample) -> f64) -> f64 {
+        let mut d = Vec::new();
+        for seg in self.data.segments.iter().filter(|s| keep_seg(s)) {
+            let rs = resample(&seg.samples, self.period_of(seg));
+            for w in rs.windows(2) {
+                if (w[1].alpha_rad - w[0].alpha_rad).abs() < 0.05f64.to_radians()
+                    && (w[1].kappa - w[0].kappa).abs() < 0.002
+                    && (w[1].fz_n - w[0].fz_n).abs() < 0.015 * self.nominal.fz0_n
+                {
+                    d.push((measured(&w[1]) - measured(&w[0])).abs());
+                }
+            }
+        }
+        crate::starts::median(d).map(|m| m / (0.6745 * std::f64::consts::SQRT_2)).unwrap_or(0.0)
+    }
+}
+
+/// Largest |measured| of a set of points (a channel's peak), never zero.
+pub fn peak_abs(points: &[Point]) -> f64 {
+    points.iter().map(|p| p.measured.abs()).fold(0.0, f64::max).max(1e-9)
+}
+
+/// Within 0.4° of zero camber.
+pub fn near_nominal_camber(p: &Point) -> bool {
+    p.input.gamma_rad.abs() < 0.4f64.to_radians()
+}
+
+/// Within 5 kPa of the nominal pressure.
+pub fn near_p0(p: &Point, p0: f64) -> bool {
+    (p.input.p_pa - p0).abs() < 5e3
+}

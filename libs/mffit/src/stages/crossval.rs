@@ -1,0 +1,161 @@
+//! Held-out accuracy: k-fold cross-validation over sweeps, and validation on another run.
+//!
+//! **k-fold.** A stage's sweeps (segments) are dealt round-robin, in recording order, into k
+//! folds. For each fold the stage's fitted coefficients are refitted on the other folds'
+//! points — starting from the all-data solution, with the same penalties — and the held-out
+//! fold is predicted; every point is predicted by a fit that never saw its sweep. The held-out
+//! NRMSE is the RMS of those predictions' errors in % of the stage's peak |measured|. Earlier
+//! stages keep their all-data coefficients (a stage is judged on its own coefficients).
+//!
+//! **Validation.** [`validate`] evaluates a fitted model, as it is, on the same stage
+//! selections of another dataset — a repeat run on a second tyre of the same construction is
+//! the natural one.
+
+use mftyre::TyreParams;
+use serde::Serialize;
+
+use crate::data::Dataset;
+use crate::engine::Channel;
+use crate::engine::Penalty;
+use crate::error::FitError;
+use crate::fit::fit_step_with;
+use crate::stages::context::{Ctx, StagePoints, peak_abs};
+use crate::stages::{FitOptions, FitResult, STAGES, Stage, StageReport};
+
+/// k-fold held-out accuracy of one stage.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct HeldOut {
+    /// Folds used.
+    pub folds: usize,
+    /// Sweeps (segments) dealt into them.
+    pub sweeps: usize,
+    /// Points predicted.
+    pub points: usize,
+    /// RMS of the held-out errors, channel units.
+    pub rmse: f64,
+    /// The same in % of the stage's peak |measured|.
+    pub nrmse_pct: f64,
+    /// RMS of the all-data fit's errors on the same points, % of peak (for comparison).
+    pub fit_nrmse_pct: f64,
+}
+
+/// Cross-validates `stage` over its `sel` points with `k` folds, refitting the stage's fitted
+/// keys (`rep.primary_keys`) from `params` (the all-data solution). `None` when there are fewer
+/// sweeps than folds or no fitted keys.
+pub fn kfold(
+    ctx: &Ctx,
+    params: &TyreParams,
+    stage: &dyn Stage,
+    rep: &StageReport,
+    sel: &StagePoints,
+    k: usize,
+) -> Result<Option<HeldOut>, FitError> {
+    let keys = &rep.primary_keys;
+    let groups = sel.distinct_groups();
+    if keys.is_empty() || groups.len() < k.max(2) {
+        return Ok(None);
+    }
+    let channel = stage.channel();
+    let peak = peak_abs(&sel.points);
+    let scale = peak / 100.0;
+    let fold_of = |g: usize| groups.iter().position(|x| *x == g).unwrap_or(0) % k;
+    let mut se = 0.0;
+    let mut se_fit = 0.0;
+    let mut n = 0usize;
+    for f in 0..k {
+        let train = sel.by_group(|g| fold_of(g) != f);
+        let test = sel.by_group(|g| fold_of(g) == f);
+        if test.is_empty() || train.len() <= keys.len() * 2 {
+            continue;
+        }
+        let mut p = params.clone();
+        let penalty =
+            stage.margins().map(|set| Penalty { set, grid: &ctx.grid, weight: Penalty::weight_for(train.len()) });
+        // Warm start from the all-data solution: a few iterations reach the training optimum.
+        let settings = crate::fit::StepSettings { max_iterations: 25, ..ctx.settings };
+        fit_step_with(stage.name(), &mut p, keys, &train.points, channel, scale, &settings, penalty)?;
+        for pt in &test.points {
+            let e = channel.eval(&p, &pt.input) - pt.measured;
+            let e_fit = channel.eval(params, &pt.input) - pt.measured;
+            if e.is_finite() {
+                se += e * e;
+                se_fit += e_fit * e_fit;
+                n += 1;
+            }
+        }
+    }
+    if n == 0 {
+        return Ok(None);
+    }
+    let rmse = (se / n as f64).sqrt();
+    Ok(Some(HeldOut {
+        folds: k,
+        sweeps: groups.len(),
+        points: n,
+        rmse,
+        nrmse_pct: 100.0 * rmse / peak,
+        fit_nrmse_pct: 100.0 * (se_fit / n as f64).sqrt() / peak,
+    }))
+}
+
+/// One stage's accuracy on another dataset.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct ValidationRow {
+    /// Stage.
+    pub stage: String,
+    /// Channel.
+    pub channel: String,
+    /// Points of the other dataset in the stage's selection.
+    pub points: usize,
+    /// RMS error, channel units.
+    pub rmse: f64,
+    /// In % of the other dataset's peak |measured| of the selection.
+    pub nrmse_pct: f64,
+    /// Mean error (model − measured), channel units.
+    pub bias: f64,
+}
+
+/// The fitted model of `result` on `other` (e.g. a repeat run): per stage that was fitted, the
+/// same selection of points from `other`, and the model's error on them.
+pub fn validate(result: &FitResult, other: &Dataset, opts: &FitOptions) -> Vec<ValidationRow> {
+    let ctx = Ctx {
+        data: other,
+        opts,
+        nominal: result.nominal.clone(),
+        settings: crate::fit::StepSettings::default(),
+        grid: crate::physics::Grid::of_range(&result.params, &result.range),
+    };
+    let mut out = Vec::new();
+    for stage in STAGES {
+        if !result.fitted(stage.name()) {
+            continue;
+        }
+        let Some(sel) = stage.select(&ctx) else { continue };
+        if sel.is_empty() {
+            continue;
+        }
+        let channel: Channel = stage.channel();
+        let (mut se, mut sum, mut n) = (0.0, 0.0, 0usize);
+        for p in &sel.points {
+            let e = channel.eval(&result.params, &p.input) - p.measured;
+            if e.is_finite() {
+                se += e * e;
+                sum += e;
+                n += 1;
+            }
+        }
+        if n == 0 {
+            continue;
+        }
+        let rmse = (se / n as f64).sqrt();
+        out.push(ValidationRow {
+            stage: stage.name().into(),
+            channel: channel.name().into(),
+            points: n,
+            rmse,
+            nrmse_pct: 100.0 * rmse / peak_abs(&sel.points),
+            bias: sum / n as f64,
+        });
+    }
+    out
+}

@@ -1,0 +1,119 @@
+//! Stage 5, `fy_combined`: the combined-slip weighting Gyκ of FY and the κ-induced side force
+//! SVyκ (RBY1–4, RCY1, REY1–2, RHY1–2, RVY1–6) from slip-ratio sweeps at a held slip angle.
+//! The weighting stays in [0, 1] by construction (penalties); a square friction ellipse — the
+//! known local minimum (thesis §5) — sends the fit to other starts.
+
+use mftyre::TyreParams;
+
+use crate::checks;
+use crate::engine::{Channel, apply};
+use crate::error::FitError;
+use crate::physics::MarginSet;
+use crate::stages::context::{Ctx, StagePoints};
+use crate::stages::fx_combined::combined_points;
+use crate::stages::steps::{decide_keys, finish, run_steps};
+use crate::stages::{Stage, StageReport};
+
+const KEYS: [&str; 15] = [
+    "RBY1", "RBY2", "RBY3", "RCY1", "REY1", "RHY1", "REY2", "RHY2", "RBY4", "RVY1", "RVY2", "RVY4", "RVY5", "RVY6",
+    "RVY3",
+];
+/// The weighting function's keys (fitted first, before the side-force terms join).
+const WEIGHTING: [&str; 9] = ["RBY1", "RBY2", "RBY3", "RCY1", "REY1", "RHY1", "REY2", "RHY2", "RBY4"];
+
+/// The stage.
+#[derive(Debug)]
+pub struct FyCombined;
+
+impl Stage for FyCombined {
+    fn name(&self) -> &'static str {
+        "fy_combined"
+    }
+
+    fn channel(&self) -> Channel {
+        Channel::Fy
+    }
+
+    fn margins(&self) -> Option<MarginSet> {
+        Some(MarginSet::FyCombined)
+    }
+
+    fn select(&self, ctx: &Ctx) -> Option<StagePoints> {
+        Some(combined_points(ctx, |s| s.fy_n, ctx.opts.max_points * 2 / 3))
+    }
+
+    fn fit(
+        &self,
+        ctx: &Ctx,
+        params: &mut TyreParams,
+        data: &StagePoints,
+        rep: &mut StageReport,
+    ) -> Result<(), FitError> {
+        let all = &data.points;
+        if all.len() < 30 {
+            return Err(FitError::NotEnoughData { stage: self.name().into(), points: all.len(), needed: 30 });
+        }
+        //           RBY1  RBY2  RBY3 RCY1 REY1 RHY1 REY2 RHY2 RBY4 RVY1 RVY2 RVY4 RVY5 RVY6 RVY3
+        let starts: [[f64; 15]; 3] = [
+            [10.0, 8.0, 0.0, 1.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 1.9, 10.0, 0.0],
+            [20.0, 15.0, 0.0, 1.1, -0.5, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 1.9, 20.0, 0.0],
+            [6.0, 4.0, 0.0, 0.9, 0.3, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 1.9, 5.0, 0.0],
+        ];
+        apply(params, &KEYS, &starts[0]);
+        let start = params.clone();
+        decide_keys(ctx, params, &start, rep, &KEYS, data, Channel::Fy);
+        let (fz0, p0) = (ctx.nominal.fz0_n, ctx.nominal.p0_pa);
+        let mut best: Option<(f64, TyreParams, StageReport)> = None;
+        for (i, st) in starts.iter().enumerate() {
+            let mut trial = params.clone();
+            let (keys, values): (Vec<&'static str>, Vec<f64>) =
+                KEYS.iter().copied().zip(st.iter().copied()).filter(|(k, _)| rep.free.contains(k)).unzip();
+            apply(&mut trial, &keys, &values);
+            let mut r = rep.clone();
+            run_steps(
+                ctx,
+                &mut trial,
+                &mut r,
+                Channel::Fy,
+                all,
+                &[("weighting", WEIGHTING.to_vec(), all.clone()), ("all", KEYS.to_vec(), all.clone())],
+                self.margins(),
+            )?;
+            let square = checks::ellipse_squareness(&trial, fz0, p0);
+            let physical = crate::physics::worst(&trial, MarginSet::FyCombined, &ctx.grid).is_none();
+            let ok = physical && square < checks::SQUARE_LIMIT;
+            if i > 0 {
+                rep.notes.push(format!(
+                    "start {}: rmse {:.1} N, ellipse squareness {square:.2}{}",
+                    i + 1,
+                    r.rmse,
+                    if physical { "" } else { " (non-physical)" }
+                ));
+            }
+            let score = if ok { r.rmse } else { f64::INFINITY };
+            if best.as_ref().is_none_or(|b| score < b.0 || (b.0.is_infinite() && r.rmse < b.2.rmse)) {
+                best = Some((score, trial, r));
+            }
+            if ok && i == 0 {
+                break;
+            }
+            if i == 0 {
+                rep.notes.push(format!(
+                    "friction ellipse squareness {square:.2} (limit {}){}: trying other starts",
+                    checks::SQUARE_LIMIT,
+                    if physical { "" } else { ", weighting non-physical" }
+                ));
+            }
+        }
+        if let Some((_, t, r)) = best {
+            *params = t;
+            rep.adopt_fit(&r);
+        }
+        rep.notes.push(format!(
+            "friction ellipse squareness {:.2} at Fz0 (1 = round, 2 = square; limit {})",
+            checks::ellipse_squareness(params, fz0, p0),
+            checks::SQUARE_LIMIT
+        ));
+        finish(ctx, params, &start, rep, Channel::Fy, data, self.margins())
+    }
+}

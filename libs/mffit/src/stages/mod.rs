@@ -1,0 +1,401 @@
+//! The staged fit in the thesis's order (§5, reference §12). Each stage is one module behind the
+//! small [`Stage`] interface: it selects its data from the [`Dataset`], estimates starting values
+//! from it, decides which of its coefficients the data identify ([`crate::identify`]), fits
+//! those in steps (nominal conditions first, then camber, then pressure, then all together, so
+//! the optimiser never has to find 30 coefficients from nowhere) with its physical margins as
+//! penalties ([`crate::physics`]), and hands the parameter set to the next stage. Afterwards
+//! every point-based stage is cross-validated over sweeps ([`crossval`]).
+//!
+//! Adding or changing a stage happens in its module and in [`STAGES`].
+
+use std::time::Instant;
+
+use mftyre::TyreParams;
+use serde::Serialize;
+
+use crate::checks;
+use crate::data::{Dataset, ValidRange};
+use crate::engine::{Channel, Point, values_of};
+use crate::error::FitError;
+use crate::fit::StepSettings;
+use crate::identify::{Estimate, Held, Levels};
+use crate::physics::{Grid, MarginSet};
+
+pub mod context;
+pub mod crossval;
+mod fx_combined;
+mod fx_pure;
+mod fy_combined;
+mod fy_pure;
+mod mx;
+mod mz_combined;
+mod mz_pure;
+pub mod nominal;
+mod radius;
+mod relaxation;
+pub mod steps;
+
+pub use context::{Ctx, StagePoints};
+pub use crossval::{HeldOut, ValidationRow, validate};
+pub use nominal::{Nominal, nominal_values};
+pub use relaxation::{static_stiffness, step_steer_length};
+
+/// The neutral MF-Tyre 6.1 template every fit starts from (generic inertia, contact patch,
+/// structural frequencies; secondary coefficients zero, i.e. "no such effect").
+pub const TEMPLATE_TIR: &str = include_str!("../template.tir");
+
+/// Options of a staged fit.
+#[derive(Debug, Clone)]
+pub struct FitOptions {
+    /// Resampling period for free-rolling data, s (the thesis fits at 10 Hz).
+    pub resample_period_s: f64,
+    /// Resampling period for BrkDrv data, s. Finer than 10 Hz: a slip-ratio sweep crosses 6 %
+    /// slip per 0.1 s at its high rate, and averaging across the peak would flatten it.
+    pub brkdrv_period_s: f64,
+    /// Also fit the graph sweeps (drift/wear checks; off by default, as in the thesis).
+    pub include_graph_sweeps: bool,
+    /// Robust (soft-L1) loss threshold in % of the channel's peak; `None` = least squares.
+    pub robust_pct: Option<f64>,
+    /// Largest number of points a stage fits (evenly decimated beyond it).
+    pub max_points: usize,
+    /// Nominal load if known (else from the data's metadata, else estimated), N.
+    pub fnomin_n: Option<f64>,
+    /// Template for the coefficients no stage fits; default [`TEMPLATE_TIR`].
+    pub template: Option<TyreParams>,
+    /// Worker threads.
+    pub threads: usize,
+    /// Iteration limit per optimiser step.
+    pub max_iterations: usize,
+    /// Folds of the k-fold cross-validation over sweeps (0 or 1: none).
+    pub folds: usize,
+    /// Stages not to run (their coefficients keep template values), by name.
+    pub skip_stages: Vec<String>,
+}
+
+impl Default for FitOptions {
+    fn default() -> Self {
+        Self {
+            resample_period_s: 0.1,
+            brkdrv_period_s: 0.02,
+            include_graph_sweeps: false,
+            robust_pct: None,
+            max_points: 3000,
+            fnomin_n: None,
+            template: None,
+            threads: std::thread::available_parallelism().map(|n| n.get()).unwrap_or(1),
+            max_iterations: 60,
+            folds: 5,
+            skip_stages: Vec::new(),
+        }
+    }
+}
+
+/// What one stage did.
+#[derive(Debug, Clone, Serialize)]
+pub struct StageReport {
+    /// Stage name (`fy_pure`, …).
+    pub stage: String,
+    /// Channel fitted.
+    pub channel: String,
+    /// Keys fitted.
+    pub keys: Vec<String>,
+    /// Points used.
+    pub points: usize,
+    /// RMS residual before the stage (starting values), channel units.
+    pub initial_rmse: f64,
+    /// RMS residual after.
+    pub rmse: f64,
+    /// Largest |measured| of the stage's points (NRMSE = RMSE / peak).
+    pub peak: f64,
+    /// Optimiser iterations over all steps.
+    pub iterations: usize,
+    /// Termination of the last step.
+    pub termination: String,
+    /// Wall time, s.
+    pub wall_s: f64,
+    /// Findings: skipped steps, restarts, fallbacks.
+    pub notes: Vec<String>,
+    /// Why the stage was skipped, if it was.
+    pub skipped: Option<String>,
+    /// Candidate keys the data identify (fitted by some step).
+    #[serde(skip)]
+    pub free: Vec<&'static str>,
+    /// Keys fitted on the stage's main channel (cross-validated, with uncertainties).
+    #[serde(skip)]
+    pub primary_keys: Vec<&'static str>,
+    /// Candidate keys the data do not identify, with the value they keep and why.
+    pub held: Vec<Held>,
+    /// Fitted coefficients with their standard deviations.
+    pub estimates: Vec<Estimate>,
+    /// Variance inflation applied for serially correlated residuals.
+    pub serial_inflation: f64,
+    /// The operating levels the stage's data hold.
+    pub levels: Option<Levels>,
+    /// k-fold held-out accuracy over sweeps.
+    pub heldout: Option<HeldOut>,
+    /// Physical margins of this stage still failing on the final model.
+    pub nonphysical: Vec<String>,
+}
+
+impl StageReport {
+    /// An empty report for `stage` on `channel`.
+    pub fn new(stage: &str, channel: &str) -> Self {
+        StageReport {
+            stage: stage.into(),
+            channel: channel.into(),
+            keys: Vec::new(),
+            points: 0,
+            initial_rmse: f64::NAN,
+            rmse: f64::NAN,
+            peak: f64::NAN,
+            iterations: 0,
+            termination: String::new(),
+            wall_s: 0.0,
+            notes: Vec::new(),
+            skipped: None,
+            free: Vec::new(),
+            primary_keys: Vec::new(),
+            held: Vec::new(),
+            estimates: Vec::new(),
+            serial_inflation: 1.0,
+            levels: None,
+            heldout: None,
+            nonphysical: Vec::new(),
+        }
+    }
+
+    /// Takes the fit's outcome (RMSE, keys, iterations, termination) from a trial report, keeping
+    /// this report's notes and held keys.
+    pub fn adopt_fit(&mut self, trial: &StageReport) {
+        self.keys = trial.keys.clone();
+        self.points = trial.points;
+        self.initial_rmse = trial.initial_rmse;
+        self.rmse = trial.rmse;
+        self.iterations += trial.iterations;
+        self.termination = trial.termination.clone();
+    }
+
+    /// RMSE in % of the stage's peak.
+    pub fn nrmse_pct(&self) -> f64 {
+        100.0 * self.rmse / self.peak
+    }
+}
+
+/// The data a stage fitted, kept for the report's metrics, plots and cross-validation.
+#[derive(Debug, Clone)]
+pub struct StageData {
+    /// Stage name.
+    pub stage: String,
+    /// Channel.
+    pub channel: Channel,
+    /// Points.
+    pub points: Vec<Point>,
+    /// Segment of each point.
+    pub groups: Vec<usize>,
+}
+
+/// The outcome of [`fit`].
+#[derive(Debug, Clone)]
+pub struct FitResult {
+    /// The fitted parameter set (FITTYP 61), limits set to the tested range.
+    pub params: TyreParams,
+    /// Nominal values.
+    pub nominal: Nominal,
+    /// Per-stage reports, in order.
+    pub stages: Vec<StageReport>,
+    /// Per-stage data.
+    pub data: Vec<StageData>,
+    /// The tested range.
+    pub range: ValidRange,
+    /// Failure-mode findings on the final model (physical margins name their stage).
+    pub warnings: Vec<String>,
+    /// Total wall time, s.
+    pub wall_s: f64,
+}
+
+impl FitResult {
+    /// Stages whose physical margins still fail on the final model.
+    pub fn nonphysical_stages(&self) -> Vec<&str> {
+        self.stages.iter().filter(|s| !s.nonphysical.is_empty()).map(|s| s.stage.as_str()).collect()
+    }
+
+    /// True when `stage` ran and fitted at least one key.
+    pub fn fitted(&self, stage: &str) -> bool {
+        self.stages.iter().any(|s| s.stage == stage && s.skipped.is_none() && !s.keys.is_empty())
+    }
+}
+
+/// One stage of the staged fit.
+pub trait Stage: Sync {
+    /// Name in reports (`fy_pure`).
+    fn name(&self) -> &'static str;
+    /// The channel it fits.
+    fn channel(&self) -> Channel;
+    /// The physical margins it owns (penalties while fitting, checks afterwards).
+    fn margins(&self) -> Option<MarginSet> {
+        None
+    }
+    /// Its points: `None` for stages that are not a least-squares fit of one channel over
+    /// sweeps (relaxation lengths), which are then not cross-validated.
+    fn select(&self, ctx: &Ctx) -> Option<StagePoints>;
+    /// Fits the stage on `data` (its selection), starting from `params`; fills `rep`. Returns
+    /// `Err(FitError::NotEnoughData)` to be skipped with the reason.
+    fn fit(
+        &self,
+        ctx: &Ctx,
+        params: &mut TyreParams,
+        data: &StagePoints,
+        rep: &mut StageReport,
+    ) -> Result<(), FitError>;
+}
+
+/// The stages, in the thesis's order.
+pub static STAGES: [&dyn Stage; 9] = [
+    &fy_pure::FyPure,
+    &mz_pure::MzPure,
+    &fx_pure::FxPure,
+    &fx_combined::FxCombined,
+    &fy_combined::FyCombined,
+    &mz_combined::MzCombined,
+    &mx::Mx,
+    &radius::Radius,
+    &relaxation::Relaxation,
+];
+
+/// Fits every stage in order, then cross-validates them. Stages without (enough) data are
+/// skipped and say so; so are stages named in `opts.skip_stages`.
+pub fn fit(data: &Dataset, opts: &FitOptions) -> Result<FitResult, FitError> {
+    let t_start = Instant::now();
+    let nominal = nominal_values(data, opts)?;
+    let mut params = match &opts.template {
+        Some(t) => t.clone(),
+        None => TyreParams::from_tir_str(TEMPLATE_TIR, "mffit template")?,
+    };
+    params.fittyp = 61;
+    params.source = "tyrerig fit".into();
+    params.set("LONGVL", nominal.v0_mps)?;
+    params.set("NOMPRES", nominal.p0_pa)?;
+    params.set("INFLPRES", nominal.p0_pa)?;
+    params.set("FNOMIN", nominal.fz0_n)?;
+    params.set("UNLOADED_RADIUS", nominal.r0_m)?;
+    let range = ValidRange::of(data);
+    let settings =
+        StepSettings { robust: opts.robust_pct, max_iterations: opts.max_iterations, threads: opts.threads.max(1) };
+    let grid = Grid::of_range(&params, &range);
+    let ctx = Ctx { data, opts, nominal: nominal.clone(), settings, grid };
+    let mut stages = Vec::new();
+    let mut stage_data = Vec::new();
+    let mut nom = StageReport::new("nominal", "-");
+    nom.keys = ["LONGVL", "NOMPRES", "FNOMIN", "UNLOADED_RADIUS"].map(String::from).to_vec();
+    nom.points = data.len();
+    nom.termination = "direct".into();
+    nom.notes = nominal.notes.clone();
+    nom.wall_s = t_start.elapsed().as_secs_f64();
+    stages.push(nom);
+
+    for stage in STAGES {
+        let t = Instant::now();
+        let mut rep = StageReport::new(stage.name(), stage.channel().name());
+        if opts.skip_stages.iter().any(|s| s == stage.name()) {
+            rep.skipped = Some("skipped on request (--skip-stage): its coefficients keep the template's values".into());
+            stages.push(rep);
+            continue;
+        }
+        let selection = stage.select(&ctx).unwrap_or_default();
+        rep.peak = context::peak_abs(&selection.points);
+        match stage.fit(&ctx, &mut params, &selection, &mut rep) {
+            Ok(()) => {
+                if !selection.is_empty() {
+                    stage_data.push(StageData {
+                        stage: stage.name().into(),
+                        channel: stage.channel(),
+                        points: selection.points.clone(),
+                        groups: selection.groups.clone(),
+                    });
+                }
+            }
+            Err(FitError::NotEnoughData { points, needed, .. }) => {
+                rep.skipped = Some(format!(
+                    "not enough data ({points} points for {needed}): its coefficients keep the template's values"
+                ));
+            }
+            Err(e) => return Err(e),
+        }
+        rep.wall_s = t.elapsed().as_secs_f64();
+        stages.push(rep);
+    }
+    let mut my = StageReport::new("my", "MY");
+    my.skipped = Some(
+        "rolling resistance moment is not measurable on this rig class (thesis §5): QSY* keep the template's generic values"
+            .into(),
+    );
+    stages.push(my);
+    set_limits(&mut params, &range, &nominal);
+
+    // Cross-validation over sweeps, stage by stage, with the final model as the base.
+    if opts.folds >= 2 {
+        for d in &stage_data {
+            let Some(stage) = STAGES.iter().find(|s| s.name() == d.stage) else { continue };
+            let Some(rep) = stages.iter_mut().find(|r| r.stage == d.stage) else { continue };
+            let t = Instant::now();
+            let sel = StagePoints { points: d.points.clone(), groups: d.groups.clone() };
+            rep.heldout = crossval::kfold(&ctx, &params, *stage, rep, &sel, opts.folds)?;
+            rep.wall_s += t.elapsed().as_secs_f64();
+        }
+    }
+
+    // Physical margins on the final model, owned by their stages.
+    let mut warnings = Vec::new();
+    for stage in STAGES {
+        let Some(set) = stage.margins() else { continue };
+        let Some(rep) = stages.iter_mut().find(|r| r.stage == stage.name()) else { continue };
+        if rep.skipped.is_some() {
+            continue;
+        }
+        let failing: Vec<String> = crate::physics::margins(&params, set, &ctx.grid)
+            .into_iter()
+            .filter(crate::physics::fails)
+            .map(|m| m.what)
+            .collect();
+        if let Some(first) = failing.first() {
+            let more = if failing.len() > 1 { format!(" (and {} more)", failing.len() - 1) } else { String::new() };
+            warnings.push(format!("non-physical after stage {}: {first}{more}", stage.name()));
+        }
+        rep.nonphysical = failing;
+    }
+    warnings.extend(checks::check_all(&params, &range));
+    warnings.dedup();
+    Ok(FitResult {
+        params,
+        nominal,
+        stages,
+        data: stage_data,
+        range,
+        warnings,
+        wall_s: t_start.elapsed().as_secs_f64(),
+    })
+}
+
+/// Writes the tested range into the `.tir` limits (the model is valid where it was tested).
+fn set_limits(params: &mut TyreParams, r: &ValidRange, n: &Nominal) {
+    let mut set = |k: &str, v: f64| {
+        if v.is_finite() {
+            let _ = params.set(k, v);
+        }
+    };
+    set("FZMIN", 0.0);
+    set("FZMAX", (r.fz_n.max * 1.1).max(2.0 * n.fz0_n));
+    set("ALPMIN", r.alpha_rad.min.min(-0.01));
+    set("ALPMAX", r.alpha_rad.max.max(0.01));
+    set("KPUMIN", r.kappa.min.min(-0.01));
+    set("KPUMAX", r.kappa.max.max(0.01));
+    set("CAMMIN", r.gamma_rad.min.min(-0.001));
+    set("CAMMAX", r.gamma_rad.max.max(0.001));
+    set("PRESMIN", (r.p_pa.min * 0.98).min(n.p0_pa));
+    set("PRESMAX", (r.p_pa.max * 1.02).max(n.p0_pa));
+}
+
+/// Values of `keys` as `(key, value)` pairs (for reports and tests).
+pub fn key_values(params: &TyreParams, keys: &[&'static str]) -> Vec<(&'static str, f64)> {
+    keys.iter().copied().zip(values_of(params, keys)).collect()
+}

@@ -1,0 +1,85 @@
+//! Stage 7, `mx`: overturning moment (QSX1–14, PPMX1) on free-rolling data (coupled-drive MX is
+//! 25× noisier, thesis §5): the linear terms first, then all, the nonlinear ones kept only if
+//! they improve on the linear fit.
+
+use mftyre::TyreParams;
+
+use crate::engine::{Channel, apply};
+use crate::error::FitError;
+use crate::identify::Held;
+use crate::stages::context::{Ctx, StagePoints};
+use crate::stages::fy_pure::cornering;
+use crate::stages::steps::{decide_keys, finish, run_steps};
+use crate::stages::{Stage, StageReport};
+
+const LINEAR: [&str; 7] = ["QSX1", "QSX2", "QSX3", "QSX12", "QSX13", "QSX14", "PPMX1"];
+const NONLINEAR: [&str; 8] = ["QSX4", "QSX5", "QSX6", "QSX7", "QSX8", "QSX9", "QSX10", "QSX11"];
+/// Where the nonlinear terms start: they multiply each other, so zero has no derivatives.
+const NONLINEAR_START: [f64; 8] = [0.05, 0.5, 1.0, 1.0, 0.5, 0.5, 0.1, 1.0];
+
+/// The stage.
+#[derive(Debug)]
+pub struct Mx;
+
+impl Stage for Mx {
+    fn name(&self) -> &'static str {
+        "mx"
+    }
+
+    fn channel(&self) -> Channel {
+        Channel::Mx
+    }
+
+    fn select(&self, ctx: &Ctx) -> Option<StagePoints> {
+        Some(ctx.points(|s| cornering(s, ctx), |_| true, |s| s.mx_nm, ctx.opts.max_points / 2))
+    }
+
+    fn fit(
+        &self,
+        ctx: &Ctx,
+        params: &mut TyreParams,
+        data: &StagePoints,
+        rep: &mut StageReport,
+    ) -> Result<(), FitError> {
+        let all = &data.points;
+        if all.len() < 50 {
+            return Err(FitError::NotEnoughData { stage: self.name().into(), points: all.len(), needed: 50 });
+        }
+        rep.notes.push("fitted on free-rolling data (coupled-drive MX too noisy, thesis §5)".into());
+        let candidates: Vec<&'static str> = [LINEAR.as_slice(), NONLINEAR.as_slice()].concat();
+        // The linear terms first, with the nonlinear ones off.
+        apply(params, &LINEAR, &[0.0; 7]);
+        apply(params, &NONLINEAR, &[0.0; 8]);
+        // Held keys go back to zero (no such term), whatever start they were tried from.
+        let start = params.clone();
+        decide_keys(ctx, params, &start, rep, &candidates, data, Channel::Mx);
+        run_steps(ctx, params, rep, Channel::Mx, all, &[("linear", LINEAR.to_vec(), all.clone())], None)?;
+        let linear = params.clone();
+        let linear_rep = rep.clone();
+        let free_nonlinear: Vec<(&'static str, f64)> =
+            NONLINEAR.iter().copied().zip(NONLINEAR_START).filter(|(k, _)| rep.free.contains(k)).collect();
+        if !free_nonlinear.is_empty() {
+            let (k, v): (Vec<&'static str>, Vec<f64>) = free_nonlinear.into_iter().unzip();
+            apply(params, &k, &v);
+            let mut r = rep.clone();
+            run_steps(ctx, params, &mut r, Channel::Mx, all, &[("all", candidates.clone(), all.clone())], None)?;
+            if r.rmse.is_finite() && r.rmse < linear_rep.rmse {
+                *rep = r;
+            } else {
+                *params = linear;
+                *rep = linear_rep;
+                rep.notes.push("nonlinear QSX4–QSX11 did not improve on the linear terms; kept at zero".into());
+                // Only the linear keys were fitted: the nonlinear ones are held at zero.
+                for k in NONLINEAR.iter().filter(|k| rep.free.contains(k)) {
+                    rep.held.push(Held {
+                        key: (*k).into(),
+                        value: 0.0,
+                        reason: "fitting it did not lower the MX error below the linear terms' fit".into(),
+                    });
+                }
+                rep.free.retain(|k| !NONLINEAR.contains(k));
+            }
+        }
+        finish(ctx, params, &start, rep, Channel::Mx, data, None)
+    }
+}

@@ -1,0 +1,110 @@
+//! Stage 2, `mz_pure`: pure aligning moment Mz0 (QBZ*, QCZ1, QDZ*, QEZ*, QHZ*, PPZ1–2) on the
+//! same points as `fy_pure`, through the full model (the trail multiplies the fitted Fy).
+
+use mftyre::TyreParams;
+
+use crate::engine::{Channel, Point, apply};
+use crate::error::FitError;
+use crate::physics::MarginSet;
+use crate::stages::context::{Ctx, StagePoints, near_nominal_camber, near_p0};
+use crate::stages::fy_pure::{cornering, lateral_points};
+use crate::stages::steps::{decide_keys, finish, run_with_restarts};
+use crate::stages::{Stage, StageReport};
+use crate::starts;
+
+const NOMINAL: [&str; 16] = [
+    "QBZ1", "QBZ2", "QBZ3", "QBZ9", "QBZ10", "QCZ1", "QDZ1", "QDZ2", "QDZ6", "QDZ7", "QEZ1", "QEZ2", "QEZ3", "QEZ4",
+    "QHZ1", "QHZ2",
+];
+const CAMBER: [&str; 11] = ["QBZ4", "QBZ5", "QDZ3", "QDZ4", "QDZ8", "QDZ9", "QDZ10", "QDZ11", "QEZ5", "QHZ3", "QHZ4"];
+const PRESSURE: [&str; 2] = ["PPZ1", "PPZ2"];
+const TRAIL: &[&str] = &["QBZ1", "QCZ1", "QDZ1", "QEZ1"];
+
+/// The stage.
+#[derive(Debug)]
+pub struct MzPure;
+
+impl Stage for MzPure {
+    fn name(&self) -> &'static str {
+        "mz_pure"
+    }
+
+    fn channel(&self) -> Channel {
+        Channel::Mz0
+    }
+
+    fn margins(&self) -> Option<MarginSet> {
+        Some(MarginSet::MzPure)
+    }
+
+    fn select(&self, ctx: &Ctx) -> Option<StagePoints> {
+        // Mz runs through the full model: fewer points keep the stage fast; 10 Hz data of a few
+        // hundred sweeps still gives thousands.
+        Some(lateral_points(ctx, |s| s.mz_nm, ctx.opts.max_points * 2 / 3))
+    }
+
+    fn fit(
+        &self,
+        ctx: &Ctx,
+        params: &mut TyreParams,
+        data: &StagePoints,
+        rep: &mut StageReport,
+    ) -> Result<(), FitError> {
+        let all = &data.points;
+        if all.len() < 50 {
+            return Err(FitError::NotEnoughData { stage: self.name().into(), points: all.len(), needed: 50 });
+        }
+        let p0 = ctx.nominal.p0_pa;
+        let fz0 = ctx.nominal.fz0_n;
+        let r0 = ctx.nominal.r0_m;
+        let nominal: Vec<Point> = all.iter().copied().filter(|p| near_nominal_camber(p) && near_p0(p, p0)).collect();
+        let base = if nominal.len() > 100 { nominal.clone() } else { all.clone() };
+        // Pneumatic trail at small slip: t = −Mz/Fy (Fy from the fitted model, less noisy).
+        let trails: Vec<f64> = base
+            .iter()
+            .filter(|p| (0.5f64.to_radians()..2.0f64.to_radians()).contains(&p.input.alpha_rad.abs()))
+            .filter_map(|p| {
+                let fy = Channel::Fy0.eval(params, &p.input);
+                (fy.abs() > 0.05 * p.input.fz_n).then(|| -p.measured / fy * fz0 / (p.input.fz_n * r0))
+            })
+            .collect();
+        let qdz1 = starts::median(trails).unwrap_or(0.1).clamp(0.01, 0.5);
+        // Mz changes sign where the trail vanishes: Ct·atan(Bt·α₀) = π/2 with Ct = 1.2.
+        let mut crossings = Vec::new();
+        for sw in &ctx.segment_points(|s| cornering(s, ctx), |s| s.mz_nm) {
+            for w in sw.windows(2) {
+                let (a, b) = (w[0], w[1]);
+                if a.input.alpha_rad.abs() > 2.0f64.to_radians()
+                    && a.measured.signum() != b.measured.signum()
+                    && a.input.alpha_rad.signum() == b.input.alpha_rad.signum()
+                {
+                    crossings.push(a.input.alpha_rad.abs());
+                }
+            }
+        }
+        let qbz1 = match starts::median(crossings) {
+            Some(a0) if a0 > 0.02 => ((std::f64::consts::FRAC_PI_2 / 1.2).tan() / a0).clamp(2.0, 40.0),
+            _ => 10.0,
+        };
+        apply(params, &["QBZ1", "QCZ1", "QDZ1", "QEZ1"], &[qbz1, 1.2, qdz1, 0.0]);
+        rep.notes.push(format!("start from data: trail/R0 {qdz1:.3}, Bt {qbz1:.1}"));
+        let mut candidates: Vec<&'static str> = NOMINAL.to_vec();
+        candidates.extend(CAMBER);
+        candidates.extend(PRESSURE);
+        let start = params.clone();
+        decide_keys(ctx, params, &start, rep, &candidates, data, Channel::Mz0);
+        let camber: Vec<Point> = all.iter().copied().filter(|p| near_p0(p, p0)).collect();
+        let steps = vec![
+            ("trail", vec!["QBZ1", "QCZ1", "QDZ1", "QDZ2", "QEZ1", "QHZ1"], base.clone()),
+            ("nominal", NOMINAL.to_vec(), base.clone()),
+            ("camber", [NOMINAL.as_slice(), CAMBER.as_slice()].concat(), camber),
+            ("pressure", PRESSURE.to_vec(), all.clone()),
+            ("all", candidates.clone(), all.clone()),
+        ];
+        // Mz's trail and residual-torque terms have local minima: other trail shapes if needed.
+        let floor = ctx.noise_floor(|s| cornering(s, ctx), |s| s.mz_nm);
+        let alts = [(TRAIL, vec![qbz1 * 0.6, 1.5, qdz1, -1.0]), (TRAIL, vec![qbz1 * 1.5, 1.0, qdz1, 0.5])];
+        run_with_restarts(ctx, params, rep, Channel::Mz0, all, &steps, floor, &alts, self.margins())?;
+        finish(ctx, params, &start, rep, Channel::Mz0, data, self.margins())
+    }
+}

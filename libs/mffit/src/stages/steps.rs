@@ -1,0 +1,181 @@
+//! How a stage fits: decide which of its keys the data identify, run its steps (each a key list
+//! over a point subset, only identifiable keys freed, physical margins as penalties), restart
+//! from other starts when stuck, then check identifiability again at the solution and give each
+//! fitted coefficient its uncertainty.
+
+use mftyre::TyreParams;
+
+use crate::engine::{Channel, Penalty, Point, apply};
+use crate::error::FitError;
+use crate::fit::{StepOutcome, fit_step_with, rms};
+use crate::identify::{self, Held, Levels};
+use crate::physics::MarginSet;
+use crate::stages::StageReport;
+use crate::stages::context::{Ctx, StagePoints, peak_abs};
+
+/// One step of a stage: a label, the keys it frees (those the data identify), its points.
+pub type Step = (&'static str, Vec<&'static str>, Vec<Point>);
+
+/// Decides which of `candidates` (priority order: nominal terms first) the stage may fit: those
+/// the structure of the data supports (enough levels of what they multiply). The rest are
+/// recorded in `rep.held` and keep their values in `start` (the template's, or the stage's
+/// documented starting value). The Jacobian's verdict comes after a first fit ([`finish`]):
+/// at the start, coefficients that multiply each other (QBZ9 with the residual torque, PKX3
+/// with PKX2 at zero) have no or collinear effects that the solution separates.
+pub fn decide_keys(
+    ctx: &Ctx,
+    params: &mut TyreParams,
+    start: &TyreParams,
+    rep: &mut StageReport,
+    candidates: &[&'static str],
+    all: &StagePoints,
+    _channel: Channel,
+) {
+    let levels = Levels::of(&all.points, ctx.nominal.fz0_n);
+    let structural = identify::structural(params, candidates, &levels);
+    rep.free = structural.free.clone();
+    for h in structural.held {
+        hold(params, start, rep, h);
+    }
+    rep.levels = Some(levels);
+}
+
+fn hold(params: &mut TyreParams, start: &TyreParams, rep: &mut StageReport, mut h: Held) {
+    let v = start.get(&h.key).unwrap_or(h.value);
+    let _ = params.set(&h.key, v);
+    h.value = v;
+    rep.free.retain(|k| *k != h.key);
+    rep.held.retain(|x| x.key != h.key);
+    rep.held.push(h);
+}
+
+/// Runs `steps` (keys limited to `rep.free`), margins of `margins` as penalties, and fills the
+/// report's RMSE and points over `all`.
+pub fn run_steps(
+    ctx: &Ctx,
+    params: &mut TyreParams,
+    rep: &mut StageReport,
+    channel: Channel,
+    all: &[Point],
+    steps: &[Step],
+    margins: Option<MarginSet>,
+) -> Result<Vec<StepOutcome>, FitError> {
+    let scale = peak_abs(all) / 100.0;
+    rep.initial_rmse = rms(params, all, channel);
+    let mut outs = Vec::new();
+    for (label, keys, pts) in steps {
+        let keys: Vec<&'static str> = keys.iter().copied().filter(|k| rep.free.contains(k)).collect();
+        if keys.is_empty() {
+            continue;
+        }
+        if pts.len() <= keys.len() * 2 {
+            rep.notes.push(format!("step `{label}` skipped: {} points", pts.len()));
+            continue;
+        }
+        let penalty = margins.map(|set| Penalty { set, grid: &ctx.grid, weight: Penalty::weight_for(pts.len()) });
+        let o = fit_step_with(&rep.stage, params, &keys, pts, channel, scale, &ctx.settings, penalty)?;
+        rep.iterations += o.iterations;
+        rep.termination = o.termination.clone();
+        outs.push(o);
+        for k in keys {
+            if !rep.keys.iter().any(|x| x == k) {
+                rep.keys.push(k.to_owned());
+            }
+        }
+    }
+    rep.points = all.len();
+    rep.rmse = rms(params, all, channel);
+    Ok(outs)
+}
+
+/// Runs `steps`, then — while the RMSE stays above 1.6× the data's noise floor (a good fit sits
+/// at 1.2–1.5× it, a stuck one at 2–10×) — runs them again from each alternative start (`keys`
+/// set to `values` on the stage's starting point), keeping the best. MF shape and curvature
+/// terms have local minima the data-derived start does not always avoid.
+#[allow(clippy::too_many_arguments)] // the stage's whole context, passed through
+pub fn run_with_restarts(
+    ctx: &Ctx,
+    params: &mut TyreParams,
+    rep: &mut StageReport,
+    channel: Channel,
+    all: &[Point],
+    steps: &[Step],
+    floor: f64,
+    alternatives: &[(&[&'static str], Vec<f64>)],
+    margins: Option<MarginSet>,
+) -> Result<(), FitError> {
+    let start = params.clone();
+    run_steps(ctx, params, rep, channel, all, steps, margins)?;
+    let tiny = 1e-6 * peak_abs(all);
+    let good_enough = |rmse: f64| rmse <= 1.6 * floor + tiny;
+    if good_enough(rep.rmse) {
+        return Ok(());
+    }
+    rep.notes.push(if floor > 0.0 {
+        format!("rmse {:.3} above 1.6x the noise floor {floor:.3}: restarting", rep.rmse)
+    } else {
+        format!("rmse {:.3} from the data's start; trying other starts", rep.rmse)
+    });
+    for (i, (keys, values)) in alternatives.iter().enumerate() {
+        let mut trial = start.clone();
+        // Only keys the data identify may move to another start.
+        let moved: Vec<(&'static str, f64)> =
+            keys.iter().copied().zip(values.iter().copied()).filter(|(k, _)| rep.free.contains(k)).collect();
+        let (mk, mv): (Vec<&'static str>, Vec<f64>) = moved.into_iter().unzip();
+        apply(&mut trial, &mk, &mv);
+        let mut r = rep.clone();
+        run_steps(ctx, &mut trial, &mut r, channel, all, steps, margins)?;
+        rep.notes.push(format!("restart {}: rmse {:.3}", i + 1, r.rmse));
+        rep.iterations += r.iterations;
+        if r.rmse < rep.rmse {
+            *params = trial;
+            rep.rmse = r.rmse;
+            rep.termination = r.termination;
+        }
+        if good_enough(rep.rmse) {
+            break;
+        }
+    }
+    Ok(())
+}
+
+/// After the fit, the Jacobian's verdict: keys that the Jacobian at the solution cannot tell
+/// apart from the keys before them (or that have no effect there) are held at their values in
+/// `start` and the rest refitted, until every fitted key is identifiable; then every fitted key
+/// gets its standard deviation.
+pub fn finish(
+    ctx: &Ctx,
+    params: &mut TyreParams,
+    start: &TyreParams,
+    rep: &mut StageReport,
+    channel: Channel,
+    all: &StagePoints,
+    margins: Option<MarginSet>,
+) -> Result<(), FitError> {
+    for _round in 0..3 {
+        let fitted: Vec<&'static str> = rep.free.iter().copied().filter(|k| rep.keys.iter().any(|x| x == k)).collect();
+        let verdict = identify::by_jacobian(params, &fitted, &all.points, channel, ctx.settings.threads);
+        if verdict.held.is_empty() {
+            break;
+        }
+        let names: Vec<String> = verdict.held.iter().map(|h| h.key.clone()).collect();
+        for mut h in verdict.held {
+            h.reason = format!("{} (Jacobian at the fitted solution)", h.reason);
+            hold(params, start, rep, h);
+        }
+        rep.keys.retain(|k| rep.free.iter().any(|f| f == k));
+        rep.notes.push(format!(
+            "held {} (not identifiable at the solution); refitted the other {}",
+            names.join(", "),
+            verdict.free.len()
+        ));
+        run_steps(ctx, params, rep, channel, &all.points, &[("refit", verdict.free, all.points.clone())], margins)?;
+    }
+    let fitted: Vec<&'static str> = rep.free.iter().copied().filter(|k| rep.keys.iter().any(|x| x == k)).collect();
+    let (est, inflation) =
+        identify::uncertainty(params, &fitted, &all.points, &all.groups, channel, ctx.settings.threads);
+    rep.estimates = est;
+    rep.serial_inflation = inflation;
+    rep.primary_keys = fitted;
+    Ok(())
+}
