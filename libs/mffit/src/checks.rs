@@ -5,6 +5,7 @@
 use mftyre::{MfInput, TyreParams, UseMode};
 
 use crate::data::ValidRange;
+use crate::physics::{self, MarginSet};
 
 /// Squareness above which a friction ellipse counts as square (see [`ellipse_squareness`]).
 /// A round ellipse gives 1.0; a square one approaches 2.0; the project's default tyre gives 1.6
@@ -51,95 +52,31 @@ pub fn ellipse_squareness(params: &TyreParams, fz0: f64, p0: f64) -> f64 {
     worst
 }
 
-/// Combined-slip weights outside [0, 1] (|combined| > |pure| by more than 2 %), as findings.
-pub fn nonphysical_combined(params: &TyreParams) -> Vec<String> {
-    let fz0 = params.fnomin_n();
-    let p0 = params.nominal_pressure_pa();
-    let v = params.longvl_mps();
-    let mut out = Vec::new();
-    for fz in [0.5 * fz0, fz0, 1.5 * fz0] {
-        for a_deg in [-8.0_f64, -3.0, 3.0, 8.0] {
-            for k in [-0.2, -0.05, 0.05, 0.2] {
-                let i = input(fz, k, a_deg.to_radians(), 0.0, p0, v);
-                let fx = mftyre::evaluate(params, UseMode::M211, &i).fx_n;
-                let fx0 = mftyre::pure_fx(params, UseMode::M211, &i);
-                if !fx.is_finite() || fx.abs() > 1.02 * fx0.abs() + 0.01 * fz {
-                    out.push(format!(
-                        "combined FX {fx:.0} N exceeds pure {fx0:.0} N at Fz {fz:.0} N, SA {a_deg} deg, SR {k}"
-                    ));
-                    return out;
-                }
-            }
-        }
-    }
-    out
-}
-
-/// Every failure-mode finding for a fitted model over its tested range.
+/// Every failure-mode finding for a fitted model over its tested range: Cy/Cx ≤ 0, the physical
+/// margins of [`crate::physics`] (one line per failing set, naming the stage that owns it), a
+/// square friction ellipse, and extrapolation instability.
 pub fn check_all(params: &TyreParams, range: &ValidRange) -> Vec<String> {
     let mut out = Vec::new();
-    let fz0 = params.fnomin_n();
-    let p0 = params.nominal_pressure_pa();
-    let lfz = |fz: f64| (fz - fz0) / fz0;
-    let dpi = |p: f64| (p - p0) / p0;
     let g = |k: &str| params.get(k).unwrap_or(0.0);
-    let fz_r = if range.fz_n.is_empty() { (0.4 * fz0, 2.0 * fz0) } else { (range.fz_n.min.max(1.0), range.fz_n.max) };
-    let g_r = if range.gamma_rad.is_empty() { (0.0, 0.0) } else { (range.gamma_rad.min, range.gamma_rad.max) };
-    let p_r = if range.p_pa.is_empty() { (p0, p0) } else { (range.p_pa.min, range.p_pa.max) };
     if g("PCY1") <= 0.0 {
         out.push(format!("non-physical: PCY1 = {} (Cy ≤ 0)", g("PCY1")));
     }
     if g("PCX1") <= 0.0 {
         out.push(format!("non-physical: PCX1 = {} (Cx ≤ 0)", g("PCX1")));
     }
-    let mut worst_dy = f64::INFINITY;
-    let mut worst_dx = f64::INFINITY;
-    let mut worst_ey = f64::NEG_INFINITY;
-    let mut worst_ex = f64::NEG_INFINITY;
-    for i in 0..=6 {
-        let fz = fz_r.0 + (fz_r.1 - fz_r.0) * i as f64 / 6.0;
-        let df = lfz(fz);
-        for j in 0..=4 {
-            let gam = g_r.0 + (g_r.1 - g_r.0) * j as f64 / 4.0;
-            for l in 0..=2 {
-                let p = p_r.0 + (p_r.1 - p_r.0) * l as f64 / 2.0;
-                let dp = dpi(p);
-                let muy = (g("PDY1") + g("PDY2") * df)
-                    * (1.0 + g("PPY3") * dp + g("PPY4") * dp * dp)
-                    * (1.0 - g("PDY3") * gam * gam);
-                let mux = (g("PDX1") + g("PDX2") * df)
-                    * (1.0 + g("PPX3") * dp + g("PPX4") * dp * dp)
-                    * (1.0 - g("PDX3") * gam * gam);
-                worst_dy = worst_dy.min(muy);
-                worst_dx = worst_dx.min(mux);
-                for sgn in [-1.0, 1.0] {
-                    let ey = (g("PEY1") + g("PEY2") * df)
-                        * (1.0 + g("PEY5") * gam * gam - (g("PEY3") + g("PEY4") * gam) * sgn);
-                    let ex = (g("PEX1") + g("PEX2") * df + g("PEX3") * df * df) * (1.0 - g("PEX4") * sgn);
-                    worst_ey = worst_ey.max(ey);
-                    worst_ex = worst_ex.max(ex);
-                }
-            }
+    let grid = physics::Grid::of_range(params, range);
+    for set in [MarginSet::FyPure, MarginSet::MzPure, MarginSet::FxPure, MarginSet::FxCombined, MarginSet::FyCombined] {
+        let failing: Vec<physics::Margin> =
+            physics::margins(params, set, &grid).into_iter().filter(physics::fails).collect();
+        if let Some(first) = failing.first() {
+            let more = if failing.len() > 1 { format!(" (and {} more)", failing.len() - 1) } else { String::new() };
+            out.push(format!("non-physical (stage {}): {}{more}", set.stage(), first.what));
         }
     }
-    // The model clamps E at 1 itself; still, E > 1 means the fit leaned on the clamp.
-    if worst_dy <= 0.0 {
-        out.push(format!("non-physical: lateral friction Dy/Fz reaches {worst_dy:.3} ≤ 0 in the tested range"));
-    }
-    if worst_dx <= 0.0 {
-        out.push(format!("non-physical: longitudinal friction Dx/Fz reaches {worst_dx:.3} ≤ 0 in the tested range"));
-    }
-    if worst_ey > 1.0 {
-        out.push(format!("non-physical: Ey reaches {worst_ey:.3} > 1 in the tested range (clamped by the model)"));
-    }
-    if worst_ex > 1.0 {
-        out.push(format!("non-physical: Ex reaches {worst_ex:.3} > 1 in the tested range (clamped by the model)"));
-    }
-    let sq = ellipse_squareness(params, fz0, p0);
+    let sq = ellipse_squareness(params, params.fnomin_n(), params.nominal_pressure_pa());
     if sq > SQUARE_LIMIT {
         out.push(format!("square friction ellipse: squareness {sq:.2} > {SQUARE_LIMIT}"));
     }
-    out.extend(nonphysical_combined(params));
     out.extend(extrapolation(params, range));
     out
 }

@@ -38,6 +38,14 @@ pub struct StageJson {
     pub points: usize,
     /// Wall time of the stage, s.
     pub wall_s: f64,
+    /// k-fold held-out NRMSE over sweeps, % of peak (None when not cross-validated).
+    pub heldout_nrmse_pct: Option<f64>,
+    /// Fitted coefficients with their standard deviations.
+    pub coefficients: Vec<crate::identify::Estimate>,
+    /// Coefficients left at their template (or start) values, and why.
+    pub held: Vec<crate::identify::Held>,
+    /// Physical margins of the stage that fail on the final model.
+    pub nonphysical: Vec<String>,
 }
 
 #[derive(Serialize)]
@@ -52,6 +60,8 @@ struct FitJson<'a> {
     skipped: Vec<(String, String)>,
     groups: &'a [Metrics],
     accuracy: Option<&'a [AccuracyRow]>,
+    validation: &'a [(String, Vec<crate::stages::ValidationRow>)],
+    nonphysical_stages: Vec<&'a str>,
 }
 
 fn io(path: &Path) -> impl Fn(std::io::Error) -> FitError + '_ {
@@ -76,6 +86,10 @@ pub fn write(dir: &Path, result: &FitResult, accuracy: Option<&[AccuracyRow]>) -
                 max_err: m.max_err,
                 points: m.points,
                 wall_s: s.wall_s,
+                heldout_nrmse_pct: s.heldout.as_ref().map(|h| h.nrmse_pct),
+                coefficients: s.estimates.clone(),
+                held: s.held.clone(),
+                nonphysical: s.nonphysical.clone(),
             });
         }
     }
@@ -90,6 +104,8 @@ pub fn write(dir: &Path, result: &FitResult, accuracy: Option<&[AccuracyRow]>) -
         skipped: result.stages.iter().filter_map(|s| s.skipped.clone().map(|r| (s.stage.clone(), r))).collect(),
         groups: &groups,
         accuracy,
+        validation: &result.validation,
+        nonphysical_stages: result.nonphysical_stages(),
     };
     let mut written = Vec::new();
     let jpath = dir.join("fit.json");
@@ -137,24 +153,37 @@ fn markdown(
     let _ = writeln!(s, "# MF-Tyre 6.1 fit report\n");
     let _ = writeln!(
         s,
-        "Nominal values: V0 = {:.1} m/s, P0 = {:.0} Pa, Fz0 = {:.0} N, R0 = {:.4} m (rolling-radius extrapolation).\n",
+        "Nominal values: V0 = {:.1} m/s, P0 = {:.0} Pa, Fz0 = {:.0} N, R0 = {:.4} m.\n",
         n.v0_mps, n.p0_pa, n.fz0_n, n.r0_m
     );
+    for note in &n.notes {
+        let _ = writeln!(s, "- {note}");
+    }
+    let _ = writeln!(s);
     let _ = writeln!(s, "Total wall time: {:.2} s.\n", result.wall_s);
     let _ = writeln!(s, "## Stages\n");
-    let _ = writeln!(s, "| stage | channel | points | RMSE | NRMSE % | bias | max err | R² | iterations | wall s |");
-    let _ = writeln!(s, "|---|---|---|---|---|---|---|---|---|---|");
+    let _ = writeln!(
+        s,
+        "NRMSE is the RMS error in % of the stage's peak |measured|; *held-out* is the k-fold cross-validation over \
+         sweeps (each point predicted by a fit that never saw its sweep).\n"
+    );
+    let _ = writeln!(
+        s,
+        "| stage | channel | points | RMSE | NRMSE % | held-out NRMSE % | bias | max err | R² | iterations | wall s |"
+    );
+    let _ = writeln!(s, "|---|---|---|---|---|---|---|---|---|---|---|");
     for st in &result.stages {
         match stages.iter().find(|j| j.stage == st.stage) {
             Some(j) => {
                 let _ = writeln!(
                     s,
-                    "| {} | {} | {} | {:.4} | {:.2} | {:.4} | {:.4} | {:.4} | {} | {:.2} |",
+                    "| {} | {} | {} | {:.4} | {:.2} | {} | {:.4} | {:.4} | {:.4} | {} | {:.2} |",
                     st.stage,
                     j.channel,
                     j.points,
                     j.rmse,
                     j.nrmse_pct,
+                    j.heldout_nrmse_pct.map(|v| format!("{v:.2}")).unwrap_or_else(|| "–".into()),
                     j.bias,
                     j.max_err,
                     j.r2,
@@ -165,7 +194,7 @@ fn markdown(
             None => {
                 let _ = writeln!(
                     s,
-                    "| {} | {} | – | – | – | – | – | – | {} | {:.2} |",
+                    "| {} | {} | – | – | – | – | – | – | – | {} | {:.2} |",
                     st.stage, st.channel, st.iterations, st.wall_s
                 );
             }
@@ -183,7 +212,67 @@ fn markdown(
             let _ = writeln!(s, "- **{}** fitted: {}", st.stage, st.keys.join(", "));
         }
     }
+    let _ = writeln!(s, "\n## Coefficients\n");
+    let _ = writeln!(
+        s,
+        "Each stage fits only the coefficients its data identify: what a coefficient multiplies must vary in the \
+         data (two loads for a load term, three for a quadratic one; two cambers; two pressures), and the Jacobian at \
+         the solution must tell it apart from the others. The rest keep the template's (or the stage's documented \
+         starting) values. ±1σ comes from the Jacobian and the residual variance, inflated for serially correlated \
+         residuals; it describes repeatability, not model-form error (see the held-out column above).\n"
+    );
+    for st in result.stages.iter().filter(|st| !st.estimates.is_empty() || !st.held.is_empty()) {
+        let _ = writeln!(s, "### {}\n", st.stage);
+        if !st.estimates.is_empty() {
+            let _ = writeln!(s, "| key | value | ±1σ |\n|---|---|---|");
+            for e in &st.estimates {
+                let _ = writeln!(s, "| {} | {:.6} | {:.3e} |", e.key, e.value, e.std);
+            }
+            let _ = writeln!(s, "\n(serial-correlation variance inflation ×{:.1})\n", st.serial_inflation);
+        }
+        if !st.held.is_empty() {
+            let _ = writeln!(s, "| key held | value | why |\n|---|---|---|");
+            for h in &st.held {
+                let _ = writeln!(s, "| {} | {} | {} |", h.key, h.value, h.reason);
+            }
+            let _ = writeln!(s);
+        }
+    }
+    if !result.validation.is_empty() {
+        let _ = writeln!(s, "\n## Validation on other runs\n");
+        let _ = writeln!(s, "The fitted model as it is, on the same stage selections of another run.\n");
+        for (src, rows) in &result.validation {
+            let _ = writeln!(
+                s,
+                "**{src}**\n\n| stage | channel | points | RMSE | NRMSE % | bias |\n|---|---|---|---|---|---|"
+            );
+            for r in rows {
+                let _ = writeln!(
+                    s,
+                    "| {} | {} | {} | {:.4} | {:.2} | {:.4} |",
+                    r.stage, r.channel, r.points, r.rmse, r.nrmse_pct, r.bias
+                );
+            }
+            let _ = writeln!(s);
+        }
+    }
     let _ = writeln!(s, "\n## Failure-mode checks\n");
+    let bad = result.nonphysical_stages();
+    if !bad.is_empty() {
+        let _ = writeln!(
+            s,
+            "**Non-physical model**: the physical margins of stage(s) {} fail on the final model.\n",
+            bad.join(", ")
+        );
+        for st in result.stages.iter().filter(|st| !st.nonphysical.is_empty()) {
+            for m in st.nonphysical.iter().take(10) {
+                let _ = writeln!(s, "- {}: {m}", st.stage);
+            }
+            if st.nonphysical.len() > 10 {
+                let _ = writeln!(s, "- {}: … {} more", st.stage, st.nonphysical.len() - 10);
+            }
+        }
+    }
     if result.warnings.is_empty() {
         let _ = writeln!(
             s,

@@ -41,7 +41,22 @@ pub struct FitArgs {
     /// Reference tyre (e.g. the virtual rig's): adds a held-out accuracy table to the report
     #[arg(long)]
     pub truth: Option<PathBuf>,
+    /// Another run to validate the fitted model on (e.g. a repeat run on a second tyre); repeatable
+    #[arg(long)]
+    pub validate: Vec<PathBuf>,
+    /// Folds of the k-fold cross-validation over sweeps (0: none)
+    #[arg(long, default_value_t = 5)]
+    pub folds: usize,
+    /// Stage not to run (its coefficients keep the template's values); repeatable
+    #[arg(long = "skip-stage", value_name = "STAGE")]
+    pub skip_stages: Vec<String>,
+    /// Exit with success even when the model is non-physical (the .tir is written either way)
+    #[arg(long)]
+    pub allow_nonphysical: bool,
 }
+
+/// Exit code of `tyrerig fit` when the model was written but is non-physical.
+pub const EXIT_NONPHYSICAL: i32 = 3;
 
 fn read_any(path: &Path) -> Result<mffit::Dataset> {
     let ext = path.extension().map(|e| e.to_string_lossy().to_ascii_lowercase()).unwrap_or_default();
@@ -72,21 +87,51 @@ pub fn run(args: FitArgs) -> Result<()> {
         max_points: args.max_points,
         fnomin_n: args.fnomin,
         template,
+        folds: args.folds,
+        skip_stages: args.skip_stages.clone(),
         ..FitOptions::default()
     };
+    for s in &opts.skip_stages {
+        if !mffit::stages::STAGES.iter().any(|st| st.name() == s) {
+            let names: Vec<&str> = mffit::stages::STAGES.iter().map(|st| st.name()).collect();
+            bail!("--skip-stage {s}: no such stage (stages: {})", names.join(", "));
+        }
+    }
     if let Some(t) = args.threads {
         opts.threads = t.max(1);
     }
-    let result = fit(&data, &opts)?;
-    eprintln!("{:<18} {:>6} {:>12} {:>12} {:>6} {:>8}", "stage", "points", "rmse", "start rmse", "iter", "wall s");
+    let mut result = fit(&data, &opts)?;
+    eprintln!(
+        "{:<18} {:>6} {:>12} {:>9} {:>9} {:>5} {:>5} {:>8}",
+        "stage", "points", "rmse", "nrmse %", "held-out", "fit", "held", "wall s"
+    );
     for s in &result.stages {
         match &s.skipped {
             Some(r) => eprintln!("{:<18} skipped: {r}", s.stage),
             None => eprintln!(
-                "{:<18} {:>6} {:>12.4} {:>12.4} {:>6} {:>8.2}",
-                s.stage, s.points, s.rmse, s.initial_rmse, s.iterations, s.wall_s
+                "{:<18} {:>6} {:>12.4} {:>9.2} {:>9} {:>5} {:>5} {:>8.2}",
+                s.stage,
+                s.points,
+                s.rmse,
+                s.nrmse_pct(),
+                s.heldout.as_ref().map(|h| format!("{:.2}", h.nrmse_pct)).unwrap_or_else(|| "–".into()),
+                s.keys.len(),
+                s.held.len(),
+                s.wall_s
             ),
         }
+    }
+    for v in &args.validate {
+        let other = read_any(v).with_context(|| format!("reading {} (--validate)", v.display()))?;
+        let rows = mffit::stages::validate(&result, &other, &opts);
+        eprintln!("validation on {}:", v.display());
+        for r in &rows {
+            eprintln!(
+                "  {:<18} {:>6} pts  NRMSE {:>6.2} %  (rmse {:.4}, bias {:+.4})",
+                r.stage, r.points, r.nrmse_pct, r.rmse, r.bias
+            );
+        }
+        result.validation.push((v.display().to_string(), rows));
     }
     for w in &result.warnings {
         eprintln!("warning: {w}");
@@ -121,6 +166,30 @@ pub fn run(args: FitArgs) -> Result<()> {
     if let Some(dir) = &args.report {
         let files = mffit::report::write(dir, &result, accuracy.as_deref())?;
         eprintln!("report: {} files in {}", files.len(), dir.display());
+    }
+    let bad = result.nonphysical_stages();
+    if !bad.is_empty() {
+        for st in result.stages.iter().filter(|s| !s.nonphysical.is_empty()) {
+            eprintln!(
+                "error: stage {} is non-physical: {}{}",
+                st.stage,
+                st.nonphysical[0],
+                if st.nonphysical.len() > 1 {
+                    format!(" (and {} more)", st.nonphysical.len() - 1)
+                } else {
+                    String::new()
+                }
+            );
+        }
+        if !args.allow_nonphysical {
+            eprintln!(
+                "{} was written, but the model is non-physical in stage(s) {}; rerun with --allow-nonphysical to accept it",
+                args.out.display(),
+                bad.join(", ")
+            );
+            std::process::exit(EXIT_NONPHYSICAL);
+        }
+        eprintln!("warning: non-physical model accepted (--allow-nonphysical)");
     }
     Ok(())
 }

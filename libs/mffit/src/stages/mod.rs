@@ -211,6 +211,8 @@ pub struct FitResult {
     pub warnings: Vec<String>,
     /// Total wall time, s.
     pub wall_s: f64,
+    /// Accuracy on other runs ([`validate`]), per source; filled by the caller.
+    pub validation: Vec<(String, Vec<ValidationRow>)>,
 }
 
 impl FitResult {
@@ -345,26 +347,18 @@ pub fn fit(data: &Dataset, opts: &FitOptions) -> Result<FitResult, FitError> {
     }
 
     // Physical margins on the final model, owned by their stages.
-    let mut warnings = Vec::new();
     for stage in STAGES {
         let Some(set) = stage.margins() else { continue };
         let Some(rep) = stages.iter_mut().find(|r| r.stage == stage.name()) else { continue };
-        if rep.skipped.is_some() {
-            continue;
+        if rep.skipped.is_none() {
+            rep.nonphysical = crate::physics::margins(&params, set, &ctx.grid)
+                .into_iter()
+                .filter(crate::physics::fails)
+                .map(|m| m.what)
+                .collect();
         }
-        let failing: Vec<String> = crate::physics::margins(&params, set, &ctx.grid)
-            .into_iter()
-            .filter(crate::physics::fails)
-            .map(|m| m.what)
-            .collect();
-        if let Some(first) = failing.first() {
-            let more = if failing.len() > 1 { format!(" (and {} more)", failing.len() - 1) } else { String::new() };
-            warnings.push(format!("non-physical after stage {}: {first}{more}", stage.name()));
-        }
-        rep.nonphysical = failing;
     }
-    warnings.extend(checks::check_all(&params, &range));
-    warnings.dedup();
+    let warnings = checks::check_all(&params, &range);
     Ok(FitResult {
         params,
         nominal,
@@ -373,6 +367,7 @@ pub fn fit(data: &Dataset, opts: &FitOptions) -> Result<FitResult, FitError> {
         range,
         warnings,
         wall_s: t_start.elapsed().as_secs_f64(),
+        validation: Vec::new(),
     })
 }
 
