@@ -355,3 +355,154 @@ pub fn gs2mf(tyre: &TyreParams, o: SynthOptions) -> Dataset {
     }
     Dataset { segments: segs, fnomin_n: Some(fz0), sources: vec!["synthetic".into()] }
 }
+
+/// The shape of a Calspan TTC run (see `docs/real-data.md`): which cells, in which order.
+#[derive(Debug, Clone, PartialEq)]
+pub struct TtcShape {
+    /// Cornering run: pressures, Pa; loads per pressure, N (in run order); cambers, deg.
+    pub cornering_pressures_pa: Vec<f64>,
+    /// Loads of the cornering sweeps, N.
+    pub cornering_loads_n: Vec<f64>,
+    /// Cambers of the cornering run, deg.
+    pub cornering_cambers_deg: Vec<f64>,
+    /// Peak slip angle of a cornering sweep, deg.
+    pub cornering_peak_deg: f64,
+    /// Drive/brake/combined run: one pressure, Pa.
+    pub drive_pressure_pa: f64,
+    /// Loads, N.
+    pub drive_loads_n: Vec<f64>,
+    /// Cambers, deg.
+    pub drive_cambers_deg: Vec<f64>,
+    /// Held slip angles, deg.
+    pub drive_slip_angles_deg: Vec<f64>,
+    /// Peak slip ratio of a drive/brake sweep.
+    pub drive_peak_kappa: f64,
+    /// Road speed, m/s.
+    pub speed_mps: f64,
+}
+
+impl TtcShape {
+    /// A race tyre's runs as the shared notes describe them (FSAE scale).
+    pub fn race() -> Self {
+        TtcShape {
+            cornering_pressures_pa: vec![70e3, 84e3, 98e3, 112e3],
+            cornering_loads_n: vec![1100.0, 1540.0, 660.0, 220.0, 1100.0, 440.0],
+            cornering_cambers_deg: vec![0.0],
+            cornering_peak_deg: 13.0,
+            drive_pressure_pa: 83e3,
+            drive_loads_n: vec![220.0, 660.0, 1100.0, 1540.0],
+            drive_cambers_deg: vec![0.0, 2.0, 4.0],
+            drive_slip_angles_deg: vec![0.0, 3.0, 6.0],
+            drive_peak_kappa: 0.2,
+            speed_mps: 40.0 / 3.6,
+        }
+    }
+}
+
+/// Noise of a small (FSAE) tyre's rig channels.
+pub const RACE_NOISE: Noise = Noise {
+    force_n: 6.0,
+    fz_n: 4.0,
+    moment_nm: 0.4,
+    angle_deg: 0.02,
+    slip_ratio: 0.0005,
+    radius_m: 3e-5,
+    coupled_gain: [2.0, 2.0, 5.0],
+};
+
+/// Synthetic TTC-shaped runs from `tyre`: `(cornering, drive_brake_combined)`, each segment a
+/// sweep with its [`Cell`](crate::data::Cell), conditioning sweeps as [`DataKind::WarmUp`]. The
+/// forces come from the MF model itself: these data test the fitter's structure (which
+/// coefficients a TTC run identifies), not its fidelity to real tyres.
+pub fn ttc_runs(tyre: &TyreParams, shape: &TtcShape, o: SynthOptions) -> (Dataset, Dataset) {
+    use crate::data::{Cell, SweepKind};
+    let mut g = Gen { tyre, o, rng: ChaCha8Rng::seed_from_u64(o.seed), fz0: tyre.fnomin_n(), v0: shape.speed_mps };
+    let dt = 1.0 / o.rate_hz;
+    let v = shape.speed_mps;
+    let median = |s: &[Sample], f: fn(&Sample) -> f64| {
+        let mut x: Vec<f64> = s.iter().map(f).collect();
+        x.sort_by(f64::total_cmp);
+        x[x.len() / 2]
+    };
+    let cell = |s: &[Sample], kind: SweepKind, reach: f64| Cell {
+        kind,
+        fz_n: median(s, |x| x.fz_n),
+        p_pa: median(s, |x| x.p_pa),
+        gamma_rad: median(s, |x| x.gamma_rad),
+        alpha_rad: if kind == SweepKind::Cornering { 0.0 } else { median(s, |x| x.alpha_rad) },
+        kappa: 0.0,
+        vx_mps: v,
+        slip_reach: reach,
+    };
+    let mut cornering = Vec::new();
+    let mut t = 0.0;
+    for &p in &shape.cornering_pressures_pa {
+        for &gam in &shape.cornering_cambers_deg {
+            // A conditioning sweep to a few degrees, then the sweeps.
+            let path = g.path(4.0, 2.0, 2.0, 1.0);
+            let s: Vec<Sample> = path
+                .iter()
+                .map(|&a| {
+                    t += dt;
+                    g.sample(t, 0.5 * g.fz0, 0.0, a, gam, p, v, t * v)
+                })
+                .collect();
+            cornering.push(segment(
+                Procedure::FreeRolling,
+                DataKind::WarmUp,
+                "ttc_cornering",
+                format!("conditioning P{:.0}", p / 1e3),
+                s,
+            ));
+            for &fz in &shape.cornering_loads_n {
+                let path = g.path(shape.cornering_peak_deg, 2.1, 2.1, 1.0);
+                let s: Vec<Sample> = path
+                    .iter()
+                    .map(|&a| {
+                        t += dt;
+                        g.sample(t, fz, 0.0, a, gam, p, v, t * v)
+                    })
+                    .collect();
+                let c = cell(&s, SweepKind::Cornering, shape.cornering_peak_deg.to_radians());
+                let mut seg = segment(
+                    Procedure::FreeRolling,
+                    DataKind::Sweep,
+                    "ttc_cornering",
+                    format!("cornering P{:.0}kPa FZ{fz:.0}N IA{gam:.0}", p / 1e3),
+                    s,
+                );
+                seg.cell = Some(c);
+                cornering.push(seg);
+            }
+        }
+    }
+    let mut drive = Vec::new();
+    let p = shape.drive_pressure_pa;
+    for &gam in &shape.drive_cambers_deg {
+        for &a in &shape.drive_slip_angles_deg {
+            for &fz in &shape.drive_loads_n {
+                let path = g.path(shape.drive_peak_kappa, 0.12, 0.12, 0.02);
+                let s: Vec<Sample> = path
+                    .iter()
+                    .map(|&k| {
+                        t += dt;
+                        g.sample(t, fz, k, a, gam, p, v, t * v)
+                    })
+                    .collect();
+                let kind = if a.abs() < 0.5 { SweepKind::DriveBrake } else { SweepKind::Combined };
+                let c = cell(&s, kind, shape.drive_peak_kappa);
+                let mut seg = segment(
+                    Procedure::BrkDrv,
+                    DataKind::Sweep,
+                    "ttc_drive_brake",
+                    format!("{} SA{a:.0} FZ{fz:.0}N IA{gam:.0}", kind.name()),
+                    s,
+                );
+                seg.cell = Some(c);
+                drive.push(seg);
+            }
+        }
+    }
+    let ds = |segments| Dataset { segments, fnomin_n: None, sources: vec!["synthetic TTC run".into()] };
+    (ds(cornering), ds(drive))
+}

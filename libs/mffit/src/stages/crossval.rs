@@ -1,7 +1,9 @@
 //! Held-out accuracy: k-fold cross-validation over sweeps, and validation on another run.
 //!
-//! **k-fold.** A stage's sweeps (segments) are dealt round-robin, in recording order, into k
-//! folds. For each fold the stage's fitted coefficients are refitted on the other folds'
+//! **k-fold.** A stage's sweeps (segments) are dealt into k folds in a fixed pseudo-random
+//! order (seeded: the same data give the same folds). Dealing in recording order would alias
+//! with the test design — a run that cycles through four loads, dealt into four folds, would
+//! hold out one whole load level per fold and measure extrapolation, not accuracy. For each fold the stage's fitted coefficients are refitted on the other folds'
 //! points — starting from the all-data solution, with the same penalties — and the held-out
 //! fold is predicted; every point is predicted by a fit that never saw its sweep. The held-out
 //! NRMSE is the RMS of those predictions' errors in % of the stage's peak |measured|. Earlier
@@ -58,7 +60,8 @@ pub fn kfold(
     let channel = stage.channel();
     let peak = peak_abs(&sel.points);
     let scale = peak / 100.0;
-    let fold_of = |g: usize| groups.iter().position(|x| *x == g).unwrap_or(0) % k;
+    let order = shuffled(groups.len());
+    let fold_of = |g: usize| order[groups.iter().position(|x| *x == g).unwrap_or(0)] % k;
     let mut se = 0.0;
     let mut se_fit = 0.0;
     let mut n = 0usize;
@@ -96,6 +99,18 @@ pub fn kfold(
         nrmse_pct: 100.0 * rmse / peak,
         fit_nrmse_pct: 100.0 * (se_fit / n as f64).sqrt() / peak,
     }))
+}
+
+/// A fixed pseudo-random permutation of `0..n` (Fisher–Yates with a seeded ChaCha8).
+fn shuffled(n: usize) -> Vec<usize> {
+    use rand::{RngExt, SeedableRng};
+    let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(0x5eed);
+    let mut v: Vec<usize> = (0..n).collect();
+    for i in (1..n).rev() {
+        let j = rng.random_range(0..=i);
+        v.swap(i, j);
+    }
+    v
 }
 
 /// One stage's accuracy on another dataset.
