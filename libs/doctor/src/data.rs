@@ -124,7 +124,7 @@ pub struct Series {
     pub mz_nm: Vec<f64>,
     /// DSTWOWHC [m] (NaN when flagged invalid).
     pub rl_m: Vec<f64>,
-    /// Mean of TRDTEMPI/C/O as the lasers read it [°C] (NaN when invalid).
+    /// Mean of the finite ones of TRDTEMPI/C/O as the lasers read it [°C] (NaN when none is).
     pub temp_laser_c: Vec<f64>,
     /// Sliding power √(PX² + PY²) from the measured forces [W].
     pub sliding_power_w: Vec<f64>,
@@ -293,7 +293,12 @@ impl Dataset {
             let temp = if smp.fault_flags & RigSample::FAULT_TEMPERATURE != 0 {
                 f64::NAN
             } else {
-                finite_or_nan((smp.trdtempi_c + smp.trdtempc_c + smp.trdtempo_c) / 3.0)
+                // The mean of the tread channels the rig has (a rig may log only the centre).
+                let (sum, n) = [smp.trdtempi_c, smp.trdtempc_c, smp.trdtempo_c]
+                    .iter()
+                    .filter(|t| t.is_finite())
+                    .fold((0.0, 0usize), |(s, n), t| (s + t, n + 1));
+                if n == 0 { f64::NAN } else { sum / n as f64 }
             };
             s.temp_laser_c.push(temp);
             let usable = sweep != usize::MAX

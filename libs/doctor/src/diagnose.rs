@@ -31,6 +31,10 @@ pub struct DoctorConfig {
     pub threads: usize,
     /// Smallest cut of the held-out RMS in a candidate's own region for it to be named.
     pub min_region_cut: f64,
+    /// Channels (FX, FYW, MZW, DSTWOWHC, in [`CHANNELS`] order) not diagnosed, with the reason:
+    /// a channel the base model was neither fitted for nor given for would show the base's own
+    /// gap, and the doctor would "explain" it with some effect.
+    pub not_diagnosed: Vec<(usize, String)>,
 }
 
 impl Default for DoctorConfig {
@@ -45,6 +49,7 @@ impl Default for DoctorConfig {
             fit: FitOptions::default(),
             threads: std::thread::available_parallelism().map_or(1, |n| n.get()).min(4),
             min_region_cut: 0.1,
+            not_diagnosed: Vec::new(),
         }
     }
 }
@@ -156,6 +161,9 @@ pub struct Diagnosis {
     pub t_ref_c: f64,
     /// Reference speed of the speed extension [m/s].
     pub v_ref_mps: f64,
+    /// Channels left out of the diagnosis, and why (e.g. `DSTWOWHC not diagnosed: the base's
+    /// loaded radius was not fitted from these logs`).
+    pub not_diagnosed: Vec<String>,
     /// Plot data (not serialised).
     #[serde(skip)]
     pub plot: PlotData,
@@ -199,7 +207,20 @@ fn total(c: [f64; 4]) -> f64 {
 pub fn diagnose(ds: &Dataset, base: &TyreParams, cfg: &DoctorConfig) -> Result<Diagnosis, DoctorError> {
     let ev = Evaluator::new(ds, base);
     let all: Vec<usize> = (0..ds.len()).collect();
-    let meas = measured(&ev);
+    let mut meas = measured(&ev);
+    // Channels not diagnosed take no part: their measured values are treated as missing.
+    for (ch, _) in &cfg.not_diagnosed {
+        for m in meas.iter_mut() {
+            if let Some(v) = m.get_mut(*ch) {
+                *v = f64::NAN;
+            }
+        }
+    }
+    let not_diagnosed: Vec<String> = cfg
+        .not_diagnosed
+        .iter()
+        .map(|(ch, why)| format!("{} not diagnosed: {why}", CHANNELS.get(*ch).copied().unwrap_or("?")))
+        .collect();
     let base_pred = ev.predict(&[], &all);
     let sigma = noise_floor(&ev, &meas, &base_pred);
     let fl = folds(&ev, cfg.folds.max(2));
@@ -430,6 +451,7 @@ pub fn diagnose(ds: &Dataset, base: &TyreParams, cfg: &DoctorConfig) -> Result<D
         stop_reason,
         t_ref_c: ev.t_ref_c,
         v_ref_mps: ev.v_ref_mps,
+        not_diagnosed,
         plot,
     })
 }

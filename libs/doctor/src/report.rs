@@ -112,6 +112,7 @@ pub fn to_json(
         },
         "thermal_reference_temp_c": dx.t_ref_c,
         "stop_reason": dx.stop_reason,
+        "not_diagnosed": dx.not_diagnosed,
         "extended_model": model_file,
         "wall_time_s": wall_time_s,
     })
@@ -202,6 +203,12 @@ pub fn markdown(
         if let Some(f) = model_file {
             let _ = writeln!(m, "Extended model: `{f}` (section `[TYRERIG_EXTENSIONS]`, see docs/doctor.md).\n");
         }
+    }
+    for nd in &dx.not_diagnosed {
+        let _ = writeln!(m, "- {nd}");
+    }
+    if !dx.not_diagnosed.is_empty() {
+        let _ = writeln!(m);
     }
     let _ = writeln!(m, "## 1. Simulate: residuals and noise floor\n");
     let _ = writeln!(m, "| channel | noise σ | base RMS | final RMS (fit) | final RMS (held-out) |");

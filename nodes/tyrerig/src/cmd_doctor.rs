@@ -51,6 +51,9 @@ pub fn run(args: DoctorArgs) -> Result<()> {
         logs.push(RawLog::read_mcap(p)?);
     }
     let ds = Dataset::from_logs(&logs, &DataOptions { point_rate_hz: args.rate_hz, ..DataOptions::default() })?;
+    // Channels the base model says nothing trustworthy about are not diagnosed (a given model
+    // speaks for every channel; a fitted one only for the channels its stages fitted).
+    let mut not_diagnosed: Vec<(usize, String)> = Vec::new();
     let (base, base_name): (TyreParams, String) = match (&args.model, args.fit) {
         (Some(m), _) => (
             TyreParams::read_tir(m).with_context(|| format!("{}: cannot read the base model", m.display()))?,
@@ -61,6 +64,7 @@ pub fn run(args: DoctorArgs) -> Result<()> {
             let data = mffit::logs::read_logs(&paths).context("reading the logs for the base fit")?;
             eprintln!("fitting the base model to {} log(s) …", paths.len());
             let fit = mffit::stages::fit(&data, &mffit::stages::FitOptions::default()).context("base model fit")?;
+            not_diagnosed = unfitted_channels(&fit);
             std::fs::create_dir_all(&args.out).with_context(|| format!("{}: cannot create", args.out.display()))?;
             let path = args.out.join("base_fit.tir");
             std::fs::write(&path, fit.params.to_tir_string()).with_context(|| format!("{}", path.display()))?;
@@ -89,8 +93,12 @@ pub fn run(args: DoctorArgs) -> Result<()> {
         min_evidence: args.min_evidence,
         max_effects: args.max_effects,
         candidates,
+        not_diagnosed,
         ..DoctorConfig::default()
     };
+    for nd in &cfg.not_diagnosed {
+        eprintln!("{} not diagnosed: {}", doctor::effects::CHANNELS[nd.0], nd.1);
+    }
     eprintln!("{} points in {} sweeps; testing {} candidates …", ds.len(), ds.sweeps.len(), cfg.candidates.len());
     let dx = diagnose(&ds, &base, &cfg)?;
     let wall = t0.elapsed().as_secs_f64();
@@ -119,4 +127,24 @@ pub fn run(args: DoctorArgs) -> Result<()> {
     }
     println!("wall time {wall:.1} s");
     Ok(())
+}
+
+/// The doctor's channels (FX, FYW, MZW, DSTWOWHC) whose stages the base fit did not fit from
+/// these logs, each with the reason.
+fn unfitted_channels(fit: &mffit::FitResult) -> Vec<(usize, String)> {
+    use doctor::effects::{CH_FX, CH_FY, CH_MZ, CH_RL};
+    let why = |what: &str, stages: &[&str]| -> Option<String> {
+        (!stages.iter().any(|s| fit.fitted(s))).then(|| {
+            format!("the base's {what} was not fitted from these logs (stage {} did not run)", stages.join("/"))
+        })
+    };
+    [
+        (CH_FX, why("longitudinal force", &["fx_pure", "fx_combined"])),
+        (CH_FY, why("lateral force", &["fy_pure", "fy_combined"])),
+        (CH_MZ, why("aligning moment", &["mz_pure", "mz_combined"])),
+        (CH_RL, why("loaded radius", &["radius_stiffness"])),
+    ]
+    .into_iter()
+    .filter_map(|(ch, r)| r.map(|r| (ch, r)))
+    .collect()
 }
