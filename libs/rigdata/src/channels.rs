@@ -113,7 +113,7 @@ impl Role {
             SlipAngle => "SLIPANGL",
             Inclination => "INCLANGL",
             LoadedRadius => "DSTWOWHC",
-            EffectiveRadius => "(RE: not used)",
+            EffectiveRadius => "not used (rig-computed)",
             Pressure => "INFLPRES",
             Fx => "FX",
             Fy => "FYW",
@@ -127,8 +127,8 @@ impl Role {
             TreadTempCentre => "TRDTEMPC",
             TreadTempOuter => "TRDTEMPO",
             RoadTemp => "road temperature",
-            AmbientTemp => "(ambient: not used)",
-            Normalised => "(not used)",
+            AmbientTemp => "ambient (checked, not fitted)",
+            Normalised => "not used (recomputed)",
             Distance => "LONGDISP",
         }
     }

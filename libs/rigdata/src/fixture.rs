@@ -1,6 +1,6 @@
 //! Synthetic TTC-like runs for tests and benchmarks: what a Calspan run file looks like around
 //! its sweeps — standstill at both ends (where `SR` reads about −0.9), load and pressure ramps
-//! between cells, conditioning sweeps to a few degrees, repeated sweeps, `SR` ≠ `SL` (offset and
+//! between cells, the wheel lifted at the end, conditioning sweeps to a few degrees, repeated sweeps, `SR` ≠ `SL` (offset and
 //! noisy while `SL` is exactly 0 in cornering), SAE signs, 50 Hz, an ambient temperature in °F
 //! labelled °C — with the list of sweeps it holds, so a test can check that a reader finds them.
 //!
@@ -233,7 +233,9 @@ pub fn ttc_run(spec: &FixtureSpec) -> FixtureRun {
         let to = State { fz_n: spec.loads_n[0], ia_deg: spec.cambers_deg[0], sa_deg: 0.0, ..b.s };
         plan(&mut b, &mut sweeps, to, false, amp);
     }
-    b.ramp(2.0, State { fz_n: 220.0, sa_deg: 0.0, sl: 0.0, ia_deg: 0.0, ..b.s });
+    // Unloaded at speed (wheel lifted), then the belt stops.
+    b.ramp(2.0, State { fz_n: 0.0, sa_deg: 0.0, sl: 0.0, ia_deg: 0.0, ..b.s });
+    b.hold(2.0);
     b.ramp(3.0, State { v_kph: 0.0, ..b.s });
     b.hold(2.0);
     FixtureRun { table: tabulate(spec, &b.rows), sweeps }

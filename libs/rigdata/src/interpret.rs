@@ -211,6 +211,9 @@ pub fn interpret(table: &ChannelTable, family: Family, convention: Convention, w
     let mut by_role: Vec<(Role, usize)> = Vec::new();
     for (i, c) in table.columns.iter().enumerate() {
         if let Some(r) = role_of(&c.name) {
+            if r == Role::Normalised {
+                continue;
+            }
             if by_role.iter().any(|(x, _)| *x == r) {
                 warn.push("duplicate role", Place::file(file).channel(&c.name), format!("a second {} channel: not used", r.tydex_name()));
             } else {
@@ -240,12 +243,12 @@ pub fn interpret(table: &ChannelTable, family: Family, convention: Convention, w
     let mut assumed = Vec::new();
     for c in &table.columns {
         let place = Place::file(file).channel(&c.name);
-        let role = role_of(&c.name).filter(|r| by_role.iter().any(|(x, i)| x == r && table.columns[*i].name == c.name));
+        let role = role_of(&c.name).filter(|r| *r == Role::Normalised || by_role.iter().any(|(x, i)| x == r && table.columns[*i].name == c.name));
         let Some(role) = role else {
             uses.push(ChannelUse { name: c.name.clone(), unit_written: c.unit.clone(), unit_read: c.unit.clone(), used_as: "not used".into() });
             continue;
         };
-        let shown_only = matches!(role, Role::EffectiveRadius | Role::Normalised);
+        let shown_only = matches!(role, Role::EffectiveRadius | Role::Normalised | Role::AmbientTemp);
         let (unit_text, guessed) = if c.unit.trim().is_empty() {
             let (u, why) = assumed_unit(role, &c.values, family, &ctx);
             if let Some(why) = why {
@@ -261,6 +264,7 @@ pub fn interpret(table: &ChannelTable, family: Family, convention: Convention, w
             Some(u) if u.quantity == role.quantity() => u,
             Some(u) if shown_only => {
                 warn.push("unit", place, format!("unit `{unit_text}` is a {} unit, expected {}: channel not used", u.quantity.name(), role.quantity().name()));
+                uses.push(ChannelUse { name: c.name.clone(), unit_written: c.unit.clone(), unit_read: unit_text, used_as: "not used (wrong unit)".into() });
                 continue;
             }
             Some(u) => {
@@ -284,7 +288,7 @@ pub fn interpret(table: &ChannelTable, family: Family, convention: Convention, w
             name: c.name.clone(),
             unit_written: c.unit.clone(),
             unit_read: unit_text,
-            used_as: if shown_only { "shown, not used".into() } else { format!("{} [{}]", role.tydex_name(), role.quantity().target_unit()) },
+            used_as: if shown_only { role.tydex_name().into() } else { format!("{} [{}]", role.tydex_name(), role.quantity().target_unit()) },
         });
     }
     if !assumed.is_empty() {

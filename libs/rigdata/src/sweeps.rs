@@ -459,7 +459,18 @@ pub fn find_sweeps(sig: &Signals, kappa_source: KappaSource, test: Option<TestKi
     mark_incomplete(&mut why, &sa_deg, opt.sa_zero_deg);
     sweeps.sort_by_key(|s| s.first);
     mark_conditioning(&mut sweeps, opt.conditioning_fraction);
-    let sweeps = merge_conditioning(sweeps);
+    let mut sweeps = merge_conditioning(sweeps);
+    // Back-to-back sweeps share their boundary row: give it to the first.
+    for k in 1..sweeps.len() {
+        let prev_last = sweeps[k - 1].last;
+        if sweeps[k].first <= prev_last {
+            sweeps[k].first = prev_last + 1;
+        }
+    }
+    sweeps.retain(|s| s.first <= s.last);
+    for s in &sweeps {
+        why[s.first..=s.last].iter_mut().for_each(|w| *w = None);
+    }
     let mut excluded: Vec<(Exclusion, usize)> = Vec::new();
     for r in why.into_iter().flatten() {
         match excluded.iter_mut().find(|(e, _)| *e == r) {
@@ -510,7 +521,8 @@ fn mark_conditioning(sweeps: &mut [FoundSweep], fraction: f64) {
     }
 }
 
-/// Back-to-back conditioning sweeps of one cell are one warm-up.
+/// Conditioning sweeps that follow each other at one cell (no fitted sweep between them) are
+/// one warm-up.
 fn merge_conditioning(sweeps: Vec<FoundSweep>) -> Vec<FoundSweep> {
     let mut out: Vec<FoundSweep> = Vec::with_capacity(sweeps.len());
     for s in sweeps {
@@ -518,7 +530,9 @@ fn merge_conditioning(sweeps: Vec<FoundSweep>) -> Vec<FoundSweep> {
             && p.conditioning
             && s.conditioning
             && p.cell.kind == s.cell.kind
-            && s.first <= p.last + 1
+            && (p.cell.fz_n - s.cell.fz_n).abs() <= (0.05 * p.cell.fz_n.abs()).max(50.0)
+            && (p.cell.p_pa - s.cell.p_pa).abs() <= 5_000.0
+            && (p.cell.gamma_rad - s.cell.gamma_rad).abs() <= 0.5_f64.to_radians()
         {
             p.last = s.last;
             p.cell.slip_reach = p.cell.slip_reach.max(s.cell.slip_reach);
