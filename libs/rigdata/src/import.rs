@@ -92,10 +92,12 @@ pub fn read_path(path: &Path, opt: &ReadOptions) -> Result<Import, ReadError> {
     let mut dataset = Dataset::default();
     let mut inspection = Inspection::default();
     for f in files_of(path)? {
-        let (d, report) = read_file(&f, opt)?;
+        let (d, report) = read_file_unlabelled(&f, opt)?;
         dataset.extend(d);
         inspection.files.push(report);
     }
+    // A test is often a folder of one-sweep files: conditioning and repeats are judged across it.
+    label(&mut dataset, &mut inspection, opt.sweeps.conditioning_fraction);
     Ok(Import { dataset, inspection })
 }
 
@@ -107,8 +109,93 @@ pub fn read_file(path: &Path, opt: &ReadOptions) -> Result<(Dataset, FileReport)
     read_bytes(&bytes, &file, format, opt)
 }
 
+fn read_file_unlabelled(path: &Path, opt: &ReadOptions) -> Result<(Dataset, FileReport), ReadError> {
+    let file = path.display().to_string();
+    let bytes = std::fs::read(path).map_err(|source| ReadError::Io { path: path.to_owned(), source })?;
+    let format = FileFormat::of(path).unwrap_or_else(|| FileFormat::sniff(&bytes));
+    read_unlabelled(&bytes, &file, format, opt)
+}
+
+/// Judges conditioning sweeps across everything read (a sweep reaching less than `fraction` of
+/// its family's typical reach — the 75th percentile of the slip-angle sweeps, or of the
+/// slip-ratio sweeps), numbers repeated sweeps per cell, names the segments, and fills each
+/// file's table of sweeps per cell. Segments without a cell (tyrerig's own TYDEX) are left as
+/// they are.
+fn label(d: &mut Dataset, ins: &mut Inspection, fraction: f64) {
+    for sa in [true, false] {
+        let fam = |s: &Segment| s.cell.is_some_and(|c| (c.kind == SweepKind::Cornering) == sa);
+        let mut reach: Vec<f64> = d.segments.iter().filter(|s| fam(s)).filter_map(|s| s.cell.map(|c| c.slip_reach)).collect();
+        if reach.len() < 2 {
+            continue;
+        }
+        reach.sort_by(f64::total_cmp);
+        let typical = reach[(reach.len() - 1) * 3 / 4];
+        for s in d.segments.iter_mut().filter(|s| fam(s)) {
+            let cond = s.cell.is_some_and(|c| c.slip_reach < fraction * typical);
+            s.kind = if cond { DataKind::WarmUp } else { DataKind::Sweep };
+        }
+    }
+    let speeds: Vec<f64> = d.segments.iter().filter_map(|s| s.cell.map(|c| c.vx_mps)).collect();
+    let speeds_differ = speeds.iter().copied().fold(f64::NEG_INFINITY, f64::max) - speeds.iter().copied().fold(f64::INFINITY, f64::min) > 1.0;
+    let mut groups: Vec<(Cell, bool, usize)> = Vec::new();
+    let mut segs = d.segments.iter_mut();
+    for f in &mut ins.files {
+        let mut cells: Vec<(Cell, usize)> = Vec::new();
+        for row in &mut f.sweeps {
+            let Some(seg) = segs.next() else { break };
+            let Some(cell) = seg.cell else { continue };
+            let cond = seg.kind == DataKind::WarmUp;
+            let k = match groups.iter_mut().find(|(c, cd, _)| *cd == cond && same_cell(c, &cell)) {
+                Some(g) => {
+                    g.2 += 1;
+                    g.clone()
+                }
+                None => {
+                    groups.push((cell, cond, 1));
+                    (cell, cond, 1)
+                }
+            };
+            let label = cell_label(&k.0, speeds_differ);
+            seg.sweep = if cond { format!("warmup (conditioning) {label} #{}", k.2) } else { format!("{label} #{}", k.2) };
+            row.name = seg.sweep.clone();
+            row.conditioning = cond;
+            if !cond {
+                match cells.iter_mut().find(|(c, _)| same_cell(c, &k.0)) {
+                    Some(c) => c.1 += 1,
+                    None => cells.push((k.0, 1)),
+                }
+            }
+        }
+        {
+            f.cells = cells
+                .iter()
+                .map(|(c, k)| CellRow {
+                    label: cell_label(c, speeds_differ),
+                    kind: c.kind.name().into(),
+                    p_kpa: c.p_pa / 1e3,
+                    fz_n: c.fz_n,
+                    ia_deg: c.gamma_rad.to_degrees(),
+                    sa_deg: c.alpha_rad.to_degrees(),
+                    v_kph: c.vx_mps * 3.6,
+                    sweeps: *k,
+                })
+                .collect();
+        }
+        f.conditioning_sweeps = f.sweeps.iter().filter(|r| r.conditioning).count();
+        f.rows_in_sweeps = f.sweeps.iter().filter(|r| !r.conditioning).map(|r| r.rows).sum();
+        f.rows_in_conditioning = f.sweeps.iter().filter(|r| r.conditioning).map(|r| r.rows).sum();
+    }
+}
+
 /// Reads the bytes of a file of a known format; `file` names it in messages.
 pub fn read_bytes(bytes: &[u8], file: &str, format: FileFormat, opt: &ReadOptions) -> Result<(Dataset, FileReport), ReadError> {
+    let (mut d, report) = read_unlabelled(bytes, file, format, opt)?;
+    let mut inspection = Inspection { files: vec![report] };
+    label(&mut d, &mut inspection, opt.sweeps.conditioning_fraction);
+    Ok((d, inspection.files.remove(0)))
+}
+
+fn read_unlabelled(bytes: &[u8], file: &str, format: FileFormat, opt: &ReadOptions) -> Result<(Dataset, FileReport), ReadError> {
     match format {
         FileFormat::Dat => {
             let t = dat::parse_dat(bytes, file)?;
@@ -223,30 +310,11 @@ fn from_table(
     if seg.sweeps.is_empty() {
         warn.push("no sweeps", Place::file(&file), "no sweep found (see the excluded rows)");
     }
-    let speeds_differ = {
-        let v: Vec<f64> = seg.sweeps.iter().map(|w| w.cell.vx_mps).filter(|v| v.is_finite()).collect();
-        v.iter().copied().fold(f64::NEG_INFINITY, f64::max) - v.iter().copied().fold(f64::INFINITY, f64::min) > 1.0
-    };
-    // Number repeated sweeps per cell.
-    let mut groups: Vec<(Cell, bool, usize)> = Vec::new();
     let mut segments = Vec::with_capacity(seg.sweeps.len());
     let mut rows_sw = Vec::with_capacity(seg.sweeps.len());
     for w in &seg.sweeps {
-        let g = match groups.iter_mut().find(|(c, cond, _)| *cond == w.conditioning && same_cell(c, &w.cell)) {
-            Some(g) => {
-                g.2 += 1;
-                g.clone()
-            }
-            None => {
-                groups.push((w.cell, w.conditioning, 1));
-                (w.cell, w.conditioning, 1)
-            }
-        };
-        let label = cell_label(&g.0, speeds_differ);
-        let name = if w.conditioning { format!("warmup (conditioning) {label} #{}", g.2) } else { format!("{label} #{}", g.2) };
-        let samples = samples_of(s, w, it.kappa_source);
         rows_sw.push(SweepRow {
-            name: name.clone(),
+            name: String::new(),
             kind: w.cell.kind.name().into(),
             conditioning: w.conditioning,
             first_row: line_of(w.first),
@@ -263,30 +331,14 @@ fn from_table(
             procedure: if w.cell.kind == SweepKind::Cornering { Procedure::FreeRolling } else { Procedure::BrkDrv },
             kind: if w.conditioning { DataKind::WarmUp } else { DataKind::Sweep },
             section: w.cell.kind.name().to_owned(),
-            sweep: name,
-            samples,
+            sweep: String::new(),
+            samples: samples_of(s, w, it.kappa_source),
             cell: Some(w.cell),
             origin: Some(Origin { file: file.clone(), first_row: line_of(w.first), last_row: line_of(w.last) }),
         });
     }
-    let cells = groups
-        .iter()
-        .filter(|g| !g.1)
-        .map(|(c, _, k)| CellRow {
-            label: cell_label(c, speeds_differ),
-            kind: c.kind.name().into(),
-            p_kpa: c.p_pa / 1e3,
-            fz_n: c.fz_n,
-            ia_deg: c.gamma_rad.to_degrees(),
-            sa_deg: c.alpha_rad.to_degrees(),
-            v_kph: c.vx_mps * 3.6,
-            sweeps: *k,
-        })
-        .collect();
     warnings.extend(warn.finish(&file));
     let n = table.rows();
-    let in_sweeps: usize = seg.sweeps.iter().filter(|w| !w.conditioning).map(|w| w.last + 1 - w.first).sum();
-    let in_cond: usize = seg.sweeps.iter().filter(|w| w.conditioning).map(|w| w.last + 1 - w.first).sum();
     let report = FileReport {
         file: file.clone(),
         format: format.to_owned(),
@@ -306,11 +358,11 @@ fn from_table(
         rows: n,
         sample_rate_hz: 1.0 / it.period_s,
         channels: it.channels.clone(),
-        cells,
+        cells: Vec::new(),
         sweeps: rows_sw,
-        conditioning_sweeps: seg.sweeps.iter().filter(|w| w.conditioning).count(),
-        rows_in_sweeps: in_sweeps,
-        rows_in_conditioning: in_cond,
+        conditioning_sweeps: 0,
+        rows_in_sweeps: 0,
+        rows_in_conditioning: 0,
         excluded: seg.excluded.iter().map(|(e, c)| (e.name().to_owned(), *c)).collect(),
         warnings,
     };

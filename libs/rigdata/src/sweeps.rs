@@ -447,7 +447,8 @@ pub fn find_sweeps(sig: &Signals, kappa_source: KappaSource, test: Option<TestKi
             gamma_rad: med(&sig.gamma_rad),
             alpha_rad: if is_sa { 0.0 } else { alpha },
             kappa,
-            vx_mps: sig.v_mps.as_ref().map(|v| med(v)).unwrap_or(f64::NAN),
+            // 0 when the file has no speed channel (a JSON-safe "unknown").
+            vx_mps: sig.v_mps.as_ref().map(|v| med(v)).filter(|v| v.is_finite()).unwrap_or(0.0),
             slip_reach: reach,
         };
         for r in f..=l {
