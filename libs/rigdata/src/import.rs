@@ -209,8 +209,11 @@ fn read_unlabelled(bytes: &[u8], file: &str, format: FileFormat, opt: &ReadOptio
         FileFormat::Tdx => {
             let tdx = tydex::parse_tdx(&String::from_utf8_lossy(bytes), file)?;
             if tdx.is_own() {
-                let d = tydex::read_own(&tdx, file)?;
-                return Ok((d.clone(), own_report(&d, file, tdx.warnings)));
+                let (d, mut w) = tydex::read_own(&tdx, file)?;
+                let mut warnings = tdx.warnings.clone();
+                warnings.append(&mut w);
+                let report = own_report(&d, file, warnings);
+                return Ok((d, report));
             }
             let (table, mut w) = tdx.to_table(file);
             let mut warnings = tdx.warnings.clone();

@@ -460,7 +460,7 @@ pub fn find_sweeps(sig: &Signals, kappa_source: KappaSource, test: Option<TestKi
     mark_incomplete(&mut why, &sa_deg, opt.sa_zero_deg);
     sweeps.sort_by_key(|s| s.first);
     mark_conditioning(&mut sweeps, opt.conditioning_fraction);
-    let mut sweeps = merge_conditioning(sweeps);
+    let mut sweeps = merge_conditioning(sweeps, &why);
     // Back-to-back sweeps share their boundary row: give it to the first.
     for k in 1..sweeps.len() {
         let prev_last = sweeps[k - 1].last;
@@ -522,9 +522,9 @@ fn mark_conditioning(sweeps: &mut [FoundSweep], fraction: f64) {
     }
 }
 
-/// Conditioning sweeps that follow each other at one cell (no fitted sweep between them) are
+/// Conditioning sweeps that follow each other at one cell, with only rolling between them, are
 /// one warm-up.
-fn merge_conditioning(sweeps: Vec<FoundSweep>) -> Vec<FoundSweep> {
+fn merge_conditioning(sweeps: Vec<FoundSweep>, why: &[Option<Exclusion>]) -> Vec<FoundSweep> {
     let mut out: Vec<FoundSweep> = Vec::with_capacity(sweeps.len());
     for s in sweeps {
         if let Some(p) = out.last_mut()
@@ -534,6 +534,7 @@ fn merge_conditioning(sweeps: Vec<FoundSweep>) -> Vec<FoundSweep> {
             && (p.cell.fz_n - s.cell.fz_n).abs() <= (0.05 * p.cell.fz_n.abs()).max(50.0)
             && (p.cell.p_pa - s.cell.p_pa).abs() <= 5_000.0
             && (p.cell.gamma_rad - s.cell.gamma_rad).abs() <= 0.5_f64.to_radians()
+            && why.get(p.last + 1..s.first).is_some_and(|gap| gap.iter().all(|w| matches!(w, None | Some(Exclusion::Idle))))
         {
             p.last = s.last;
             p.cell.slip_reach = p.cell.slip_reach.max(s.cell.slip_reach);

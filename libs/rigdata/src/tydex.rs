@@ -400,8 +400,10 @@ pub fn write_tydex(path: &Path, data: &Dataset) -> Result<(), ReadError> {
     std::fs::write(path, to_tydex(data, &id)).map_err(|source| ReadError::Io { path: path.to_owned(), source })
 }
 
-/// The dataset of a file [`to_tydex`] wrote: segments exactly as exported.
-pub fn read_own(tdx: &TdxFile, file: &str) -> Result<Dataset, ReadError> {
+/// The dataset of a file [`to_tydex`] wrote: segments exactly as exported. Rows whose load,
+/// slip angle or slip ratio is not a number (a damaged file) are dropped with a warning.
+pub fn read_own(tdx: &TdxFile, file: &str) -> Result<(Dataset, Vec<Warning>), ReadError> {
+    let mut warn = Warnings::default();
     let mut meta: Vec<(Procedure, DataKind, String, String)> = Vec::new();
     let mut fnomin = None;
     for c in &tdx.comments {
@@ -450,8 +452,12 @@ pub fn read_own(tdx: &TdxFile, file: &str) -> Result<Dataset, ReadError> {
         for (k, ch, u) in &setters {
             (ch.set)(&mut s, u.to_target(row[*k]));
         }
+        if !(s.fz_n.is_finite() && s.alpha_rad.is_finite() && s.kappa.is_finite()) {
+            warn.push("non-finite", Place::line(file, *ln), "FZW, SLIPANGL or LONGSLIP not a number: row dropped");
+            continue;
+        }
         segments[i].samples.push(s);
     }
     segments.retain(|s| !s.samples.is_empty());
-    Ok(Dataset { segments, fnomin_n: fnomin, sources: vec![file.to_owned()] })
+    Ok((Dataset { segments, fnomin_n: fnomin, sources: vec![file.to_owned()] }, warn.finish(file)))
 }
