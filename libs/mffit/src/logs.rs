@@ -137,7 +137,10 @@ pub fn read_log(path: &Path) -> Result<Dataset, FitError> {
                     .and_then(|j| serde_json::from_str(j).ok());
                 open = Some(Segment {
                     procedure,
-                    kind: meta.as_ref().map(|m| m.kind).unwrap_or_else(|| DataKind::from_names(&st.section, &st.sweep_name)),
+                    kind: meta
+                        .as_ref()
+                        .map(|m| m.kind)
+                        .unwrap_or_else(|| DataKind::from_names(&st.section, &st.sweep_name)),
                     section: st.section.clone(),
                     sweep: st.sweep_name.clone(),
                     samples: Vec::new(),

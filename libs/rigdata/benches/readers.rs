@@ -12,7 +12,11 @@ use rigdata::table::{DatLayout, to_dat};
 const ROWS: usize = 20_000;
 
 fn run_table() -> rigdata::ChannelTable {
-    let spec = FixtureSpec { pressures_kpa: vec![70.0, 84.0, 98.0, 112.0], loads_n: vec![1100.0, 1540.0, 660.0, 220.0], ..FixtureSpec::cornering() };
+    let spec = FixtureSpec {
+        pressures_kpa: vec![70.0, 84.0, 98.0, 112.0],
+        loads_n: vec![1100.0, 1540.0, 660.0, 220.0],
+        ..FixtureSpec::cornering()
+    };
     let mut t = ttc_run(&spec).table;
     assert!(t.rows() >= ROWS, "fixture has {} rows", t.rows());
     for c in &mut t.columns {

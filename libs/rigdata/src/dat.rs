@@ -26,11 +26,8 @@ pub struct TextTable {
 /// Fields of a line: tab-separated when the line has tabs (the TTC layout), else separated by
 /// runs of spaces. Trailing empty fields (trailing tabs) are dropped.
 fn fields(line: &str) -> (Vec<&str>, bool) {
-    let mut f: Vec<&str> = if line.contains('\t') {
-        line.split('\t').map(str::trim).collect()
-    } else {
-        line.split_whitespace().collect()
-    };
+    let mut f: Vec<&str> =
+        if line.contains('\t') { line.split('\t').map(str::trim).collect() } else { line.split_whitespace().collect() };
     let mut trailing = false;
     while f.last().is_some_and(|s| s.is_empty()) {
         f.pop();
@@ -66,12 +63,17 @@ pub fn parse_dat(bytes: &[u8], file: &str) -> Result<TextTable, ReadError> {
     let mut warn = Warnings::default();
     let text = String::from_utf8_lossy(bytes);
     if matches!(text, std::borrow::Cow::Owned(_)) {
-        warn.push("encoding", Place::file(file), "not valid UTF-8: undecodable bytes replaced (check the title and units)");
+        warn.push(
+            "encoding",
+            Place::file(file),
+            "not valid UTF-8: undecodable bytes replaced (check the title and units)",
+        );
     }
     let lines = numbered_lines(&text);
     // The names line: the first of the first few non-blank lines that holds at least two
     // channel names and no number. Lines above it are the title.
-    let head: Vec<usize> = lines.iter().enumerate().filter(|(_, (_, l))| !l.trim().is_empty()).map(|(i, _)| i).take(10).collect();
+    let head: Vec<usize> =
+        lines.iter().enumerate().filter(|(_, (_, l))| !l.trim().is_empty()).map(|(i, _)| i).take(10).collect();
     let names_at = head
         .iter()
         .copied()
@@ -97,7 +99,11 @@ pub fn parse_dat(bytes: &[u8], file: &str) -> Result<TextTable, ReadError> {
     let mut names: Vec<String> = Vec::with_capacity(raw_names.len());
     for (i, n) in raw_names.iter().enumerate() {
         let mut name = if n.is_empty() {
-            warn.push("empty name", Place::line(file, names_line), format!("column {} has no name: called COL{}", i + 1, i + 1));
+            warn.push(
+                "empty name",
+                Place::line(file, names_line),
+                format!("column {} has no name: called COL{}", i + 1, i + 1),
+            );
             format!("COL{}", i + 1)
         } else {
             (*n).to_owned()
@@ -193,7 +199,11 @@ pub fn parse_dat(bytes: &[u8], file: &str) -> Result<TextTable, ReadError> {
             continue;
         }
         if f.len() > n {
-            warn.push("extra values", Place::line(file, ln), format!("{} values for {n} channels: the extra ones ignored", f.len()));
+            warn.push(
+                "extra values",
+                Place::line(file, ln),
+                format!("{} values for {n} channels: the extra ones ignored", f.len()),
+            );
         }
         for (k, s) in f.iter().take(n).enumerate() {
             let v = match s.parse::<f64>() {
@@ -219,7 +229,10 @@ pub fn parse_dat(bytes: &[u8], file: &str) -> Result<TextTable, ReadError> {
         );
     }
     if row_lines.is_empty() {
-        return Err(ReadError::at(Place::line(file, names_line), "no rows of numbers after the channel names and units"));
+        return Err(ReadError::at(
+            Place::line(file, names_line),
+            "no rows of numbers after the channel names and units",
+        ));
     }
     let mut table = ChannelTable { source: file.to_owned(), title, ..Default::default() };
     table.tire_id = table.title.as_deref().and_then(tire_name_of);

@@ -165,7 +165,13 @@ impl Builder {
         let base = self.s;
         for k in 1..=n {
             let f = k as f64 / n as f64;
-            let x = if f < 0.25 { -4.0 * f } else if f < 0.75 { -1.0 + 4.0 * (f - 0.25) } else { 1.0 - 4.0 * (f - 0.75) };
+            let x = if f < 0.25 {
+                -4.0 * f
+            } else if f < 0.75 {
+                -1.0 + 4.0 * (f - 0.25)
+            } else {
+                1.0 - 4.0 * (f - 0.75)
+            };
             let mut s = base;
             if on_sa {
                 s.sa_deg = amp * x;
@@ -207,7 +213,14 @@ pub fn ttc_run(spec: &FixtureSpec) -> FixtureRun {
             SweepKind::Combined
         };
         // ISO-W slip angle held: the file's SAE angle flips.
-        sweeps.push(PlannedSweep { kind, conditioning, fz_n: to.fz_n, p_kpa: to.p_kpa, ia_deg: to.ia_deg, sa_deg: -to.sa_deg });
+        sweeps.push(PlannedSweep {
+            kind,
+            conditioning,
+            fz_n: to.fz_n,
+            p_kpa: to.p_kpa,
+            ia_deg: to.ia_deg,
+            sa_deg: -to.sa_deg,
+        });
     };
     for &p in &spec.pressures_kpa {
         // Pressure set at light load.
@@ -301,8 +314,14 @@ fn tabulate(spec: &FixtureSpec, rows: &[(f64, State)]) -> ChannelTable {
             c[k].push(*v);
         }
     }
-    let names = ["ET", "V", "N", "SA", "IA", "RL", "RE", "P", "FX", "FY", "FZ", "MX", "MZ", "NFX", "NFY", "RST", "TSTI", "TSTC", "TSTO", "AMBTMP", "SR", "SL"];
-    let units = ["s", "kph", "rpm", "deg", "deg", "cm", "cm", "kPa", "N", "N", "N", "N-m", "N-m", "none", "none", "degC", "degC", "degC", "degC", "degC", "none", "none"];
+    let names = [
+        "ET", "V", "N", "SA", "IA", "RL", "RE", "P", "FX", "FY", "FZ", "MX", "MZ", "NFX", "NFY", "RST", "TSTI", "TSTC",
+        "TSTO", "AMBTMP", "SR", "SL",
+    ];
+    let units = [
+        "s", "kph", "rpm", "deg", "deg", "cm", "cm", "kPa", "N", "N", "N", "N-m", "N-m", "none", "none", "degC",
+        "degC", "degC", "degC", "degC", "none", "none",
+    ];
     let mut t = ChannelTable {
         source: "fixture".into(),
         title: Some(format!(
@@ -311,7 +330,11 @@ fn tabulate(spec: &FixtureSpec, rows: &[(f64, State)]) -> ChannelTable {
             if spec.cornering { "cornering" } else { "drive/brake/combined" }
         )),
         tire_id: Some("Fixture 20.5x7.0-13, R25B".into()),
-        test_id: Some(if spec.cornering { "Cornering, Various pressures".into() } else { "Drive/Brake/Combined, 12psi".into() }),
+        test_id: Some(if spec.cornering {
+            "Cornering, Various pressures".into()
+        } else {
+            "Drive/Brake/Combined, 12psi".into()
+        }),
         columns: Vec::new(),
     };
     for (k, (name, unit)) in names.iter().zip(units).enumerate() {

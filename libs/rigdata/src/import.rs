@@ -124,7 +124,8 @@ fn read_file_unlabelled(path: &Path, opt: &ReadOptions) -> Result<(Dataset, File
 fn label(d: &mut Dataset, ins: &mut Inspection, fraction: f64) {
     for sa in [true, false] {
         let fam = |s: &Segment| s.cell.is_some_and(|c| (c.kind == SweepKind::Cornering) == sa);
-        let mut reach: Vec<f64> = d.segments.iter().filter(|s| fam(s)).filter_map(|s| s.cell.map(|c| c.slip_reach)).collect();
+        let mut reach: Vec<f64> =
+            d.segments.iter().filter(|s| fam(s)).filter_map(|s| s.cell.map(|c| c.slip_reach)).collect();
         if reach.len() < 2 {
             continue;
         }
@@ -136,7 +137,9 @@ fn label(d: &mut Dataset, ins: &mut Inspection, fraction: f64) {
         }
     }
     let speeds: Vec<f64> = d.segments.iter().filter_map(|s| s.cell.map(|c| c.vx_mps)).collect();
-    let speeds_differ = speeds.iter().copied().fold(f64::NEG_INFINITY, f64::max) - speeds.iter().copied().fold(f64::INFINITY, f64::min) > 1.0;
+    let speeds_differ = speeds.iter().copied().fold(f64::NEG_INFINITY, f64::max)
+        - speeds.iter().copied().fold(f64::INFINITY, f64::min)
+        > 1.0;
     let mut groups: Vec<(Cell, bool, usize)> = Vec::new();
     let mut segs = d.segments.iter_mut();
     for f in &mut ins.files {
@@ -156,7 +159,8 @@ fn label(d: &mut Dataset, ins: &mut Inspection, fraction: f64) {
                 }
             };
             let label = cell_label(&k.0, speeds_differ);
-            seg.sweep = if cond { format!("warmup (conditioning) {label} #{}", k.2) } else { format!("{label} #{}", k.2) };
+            seg.sweep =
+                if cond { format!("warmup (conditioning) {label} #{}", k.2) } else { format!("{label} #{}", k.2) };
             row.name = seg.sweep.clone();
             row.conditioning = cond;
             if !cond {
@@ -188,19 +192,38 @@ fn label(d: &mut Dataset, ins: &mut Inspection, fraction: f64) {
 }
 
 /// Reads the bytes of a file of a known format; `file` names it in messages.
-pub fn read_bytes(bytes: &[u8], file: &str, format: FileFormat, opt: &ReadOptions) -> Result<(Dataset, FileReport), ReadError> {
+pub fn read_bytes(
+    bytes: &[u8],
+    file: &str,
+    format: FileFormat,
+    opt: &ReadOptions,
+) -> Result<(Dataset, FileReport), ReadError> {
     let (mut d, report) = read_unlabelled(bytes, file, format, opt)?;
     let mut inspection = Inspection { files: vec![report] };
     label(&mut d, &mut inspection, opt.sweeps.conditioning_fraction);
     Ok((d, inspection.files.remove(0)))
 }
 
-fn read_unlabelled(bytes: &[u8], file: &str, format: FileFormat, opt: &ReadOptions) -> Result<(Dataset, FileReport), ReadError> {
+fn read_unlabelled(
+    bytes: &[u8],
+    file: &str,
+    format: FileFormat,
+    opt: &ReadOptions,
+) -> Result<(Dataset, FileReport), ReadError> {
     match format {
         FileFormat::Dat => {
             let t = dat::parse_dat(bytes, file)?;
             let lines = t.lines;
-            from_table(&t.table, "TTC ASCII (.dat)", None, Family::Ttc, t.warnings, &|r| lines.get(r).copied().unwrap_or(r + 1), opt, None)
+            from_table(
+                &t.table,
+                "TTC ASCII (.dat)",
+                None,
+                Family::Ttc,
+                t.warnings,
+                &|r| lines.get(r).copied().unwrap_or(r + 1),
+                opt,
+                None,
+            )
         }
         FileFormat::Mat => {
             let m = mat::parse_mat(bytes, file)?;
@@ -220,7 +243,16 @@ fn read_unlabelled(bytes: &[u8], file: &str, format: FileFormat, opt: &ReadOptio
             warnings.append(&mut w);
             let lines: Vec<usize> = tdx.rows.iter().map(|(l, _)| *l).collect();
             let fnomin = tdx.constant_si(&["FNOMIN", "FZW", "NOMLOAD", "FZNOMIN"]).map(|x| x.0);
-            from_table(&table, "TYDEX (.tdx)", None, Family::Tydex, warnings, &|r| lines.get(r).copied().unwrap_or(r + 1), opt, fnomin)
+            from_table(
+                &table,
+                "TYDEX (.tdx)",
+                None,
+                Family::Tydex,
+                warnings,
+                &|r| lines.get(r).copied().unwrap_or(r + 1),
+                opt,
+                fnomin,
+            )
         }
     }
 }
@@ -237,7 +269,13 @@ fn own_report(d: &Dataset, file: &str, warnings: Vec<Warning>) -> FileReport {
         sweeps: d
             .segments
             .iter()
-            .map(|s| SweepRow { name: s.sweep.clone(), kind: format!("{:?} {}", s.kind, s.procedure.name()), conditioning: s.kind == DataKind::WarmUp, rows: s.samples.len(), ..SweepRow::default() })
+            .map(|s| SweepRow {
+                name: s.sweep.clone(),
+                kind: format!("{:?} {}", s.kind, s.procedure.name()),
+                conditioning: s.kind == DataKind::WarmUp,
+                rows: s.samples.len(),
+                ..SweepRow::default()
+            })
             .collect(),
         warnings,
         ..FileReport::default()
@@ -252,7 +290,13 @@ fn deg(x: f64) -> String {
 
 /// The name of a cell a person reads: `cornering P83kPa FZ1100N IA0`, `combined … SA3`.
 pub fn cell_label(c: &Cell, with_speed: bool) -> String {
-    let mut s = format!("{} P{:.0}kPa FZ{:.0}N IA{}", c.kind.name(), c.p_pa / 1e3, (c.fz_n / 10.0).round() * 10.0, deg(c.gamma_rad));
+    let mut s = format!(
+        "{} P{:.0}kPa FZ{:.0}N IA{}",
+        c.kind.name(),
+        c.p_pa / 1e3,
+        (c.fz_n / 10.0).round() * 10.0,
+        deg(c.gamma_rad)
+    );
     if c.kind == SweepKind::Combined {
         s.push_str(&format!(" SA{}", deg(c.alpha_rad)));
     }
@@ -301,10 +345,18 @@ fn from_table(
     if let Some(st) = stated {
         let id = table.test_id.as_deref().unwrap_or("title");
         if st == TestKind::Cornering && n_k > 0 {
-            warn.push("test kind", Place::file(&file), format!("the file says `{id}` (cornering) but {n_k} slip-ratio sweeps were found"));
+            warn.push(
+                "test kind",
+                Place::file(&file),
+                format!("the file says `{id}` (cornering) but {n_k} slip-ratio sweeps were found"),
+            );
         }
         if st == TestKind::DriveBrake && n_sa > 0 {
-            warn.push("test kind", Place::file(&file), format!("the file says `{id}` (drive/brake/combined) but {n_sa} slip-angle sweeps were found"));
+            warn.push(
+                "test kind",
+                Place::file(&file),
+                format!("the file says `{id}` (drive/brake/combined) but {n_sa} slip-angle sweeps were found"),
+            );
         }
     }
     if seg.kappa_ignored {
@@ -350,12 +402,18 @@ fn from_table(
         tire_id: table.tire_id.clone(),
         test_id: table.test_id.clone(),
         test_kind_stated: stated.map(|k| k.name().to_owned()),
-        test_kind_found: found.map(|k| k.name().to_owned()).unwrap_or_else(|| if seg.sweeps.is_empty() { "none".into() } else { "mixed".into() }),
+        test_kind_found: found
+            .map(|k| k.name().to_owned())
+            .unwrap_or_else(|| if seg.sweeps.is_empty() { "none".into() } else { "mixed".into() }),
         convention: it.convention.name().into(),
         convention_basis: it.convention_basis.clone(),
         slip_ratio_from: match it.kappa_source {
             KappaSource::LoadedRadius => format!("{} (loaded radius)", it.kappa_channel.clone().unwrap_or_default()),
-            KappaSource::EffectiveRadius => format!("{} (effective radius; no SL in the file), zeroed in {} free-rolling rows", it.kappa_channel.clone().unwrap_or_default(), seg.sr_zeroed),
+            KappaSource::EffectiveRadius => format!(
+                "{} (effective radius; no SL in the file), zeroed in {} free-rolling rows",
+                it.kappa_channel.clone().unwrap_or_default(),
+                seg.sr_zeroed
+            ),
             KappaSource::Absent => "none (taken as 0)".into(),
         },
         rows: n,

@@ -145,7 +145,12 @@ impl FileReport {
     fn write_text(&self, s: &mut String, verbose: bool) {
         let _ = writeln!(s, "== {}", self.file);
         let opt = |o: &Option<String>| o.clone().unwrap_or_else(|| "-".into());
-        let _ = writeln!(s, "format      {}{}", self.format, self.layout.as_ref().map(|l| format!(", channels as {l}")).unwrap_or_default());
+        let _ = writeln!(
+            s,
+            "format      {}{}",
+            self.format,
+            self.layout.as_ref().map(|l| format!(", channels as {l}")).unwrap_or_default()
+        );
         if let Some(t) = &self.title {
             let _ = writeln!(s, "title       {t}");
         }
@@ -168,13 +173,30 @@ impl FileReport {
             }
         }
         if !self.cells.is_empty() {
-            let _ = writeln!(s, "\nsweeps per cell ({} sweeps, {} conditioning)", self.sweeps.len() - self.conditioning_sweeps, self.conditioning_sweeps);
-            let _ = writeln!(s, "  {:<12} {:>7} {:>7} {:>6} {:>6} {:>6} {:>6}", "kind", "P kPa", "FZ N", "IA deg", "SA deg", "V kph", "sweeps");
+            let _ = writeln!(
+                s,
+                "\nsweeps per cell ({} sweeps, {} conditioning)",
+                self.sweeps.len() - self.conditioning_sweeps,
+                self.conditioning_sweeps
+            );
+            let _ = writeln!(
+                s,
+                "  {:<12} {:>7} {:>7} {:>6} {:>6} {:>6} {:>6}",
+                "kind", "P kPa", "FZ N", "IA deg", "SA deg", "V kph", "sweeps"
+            );
             for c in &self.cells {
+                // Rounded first so a -0.01° camber prints as 0.0, not -0.0.
+                let r1 = |x: f64| (x * 10.0).round() / 10.0 + 0.0;
                 let _ = writeln!(
                     s,
                     "  {:<12} {:>7.1} {:>7.0} {:>6.1} {:>6.1} {:>6.1} {:>6}",
-                    c.kind, c.p_kpa, c.fz_n, c.ia_deg, c.sa_deg, c.v_kph, c.sweeps
+                    c.kind,
+                    r1(c.p_kpa),
+                    c.fz_n,
+                    r1(c.ia_deg),
+                    r1(c.sa_deg),
+                    r1(c.v_kph),
+                    c.sweeps
                 );
             }
         }

@@ -154,7 +154,10 @@ fn assumed_unit(role: Role, values: &[f64], family: Family, ctx: &GuessContext) 
             } else if m >= 50.0 {
                 (default.into(), None)
             } else if m >= 3.0 {
-                guess("psi", format!("median {m:.1} looks like psi (as kPa it would be {m:.1} kPa, too low for a tyre)"))
+                guess(
+                    "psi",
+                    format!("median {m:.1} looks like psi (as kPa it would be {m:.1} kPa, too low for a tyre)"),
+                )
             } else if m >= 0.3 {
                 guess("bar", format!("median {m:.2} looks like bar"))
             } else {
@@ -204,7 +207,12 @@ struct GuessContext {
 }
 
 /// Reads a table into signals. `family` sets the units assumed where the file has none.
-pub fn interpret(table: &ChannelTable, family: Family, convention: Convention, warn: &mut Warnings) -> Result<Interpreted, ReadError> {
+pub fn interpret(
+    table: &ChannelTable,
+    family: Family,
+    convention: Convention,
+    warn: &mut Warnings,
+) -> Result<Interpreted, ReadError> {
     let file = table.source.as_str();
     let n = table.rows();
     // Which column plays which role: the first column of a role wins.
@@ -215,7 +223,11 @@ pub fn interpret(table: &ChannelTable, family: Family, convention: Convention, w
                 continue;
             }
             if by_role.iter().any(|(x, _)| *x == r) {
-                warn.push("duplicate role", Place::file(file).channel(&c.name), format!("a second {} channel: not used", r.tydex_name()));
+                warn.push(
+                    "duplicate role",
+                    Place::file(file).channel(&c.name),
+                    format!("a second {} channel: not used", r.tydex_name()),
+                );
             } else {
                 by_role.push((r, i));
             }
@@ -225,7 +237,10 @@ pub fn interpret(table: &ChannelTable, family: Family, convention: Convention, w
     for r in [Role::Fz, Role::SlipAngle] {
         if col(r).is_none() {
             let names = if r == Role::Fz { "FZ / FZW" } else { "SA / SLIPANGL" };
-            return Err(ReadError::at(Place::file(file).channel(names), format!("channel missing: the fitter needs {}", r.tydex_name())));
+            return Err(ReadError::at(
+                Place::file(file).channel(names),
+                format!("channel missing: the fitter needs {}", r.tydex_name()),
+            ));
         }
     }
     // Wheel speed × loaded radius, both in TTC units, for the speed-unit check.
@@ -243,9 +258,16 @@ pub fn interpret(table: &ChannelTable, family: Family, convention: Convention, w
     let mut assumed = Vec::new();
     for c in &table.columns {
         let place = Place::file(file).channel(&c.name);
-        let role = role_of(&c.name).filter(|r| *r == Role::Normalised || by_role.iter().any(|(x, i)| x == r && table.columns[*i].name == c.name));
+        let role = role_of(&c.name).filter(|r| {
+            *r == Role::Normalised || by_role.iter().any(|(x, i)| x == r && table.columns[*i].name == c.name)
+        });
         let Some(role) = role else {
-            uses.push(ChannelUse { name: c.name.clone(), unit_written: c.unit.clone(), unit_read: c.unit.clone(), used_as: "not used".into() });
+            uses.push(ChannelUse {
+                name: c.name.clone(),
+                unit_written: c.unit.clone(),
+                unit_read: c.unit.clone(),
+                used_as: "not used".into(),
+            });
             continue;
         };
         let shown_only = matches!(role, Role::EffectiveRadius | Role::Normalised | Role::AmbientTemp);
@@ -263,22 +285,52 @@ pub fn interpret(table: &ChannelTable, family: Family, convention: Convention, w
         let unit = match units::parse(&unit_text) {
             Some(u) if u.quantity == role.quantity() => u,
             Some(u) if shown_only => {
-                warn.push("unit", place, format!("unit `{unit_text}` is a {} unit, expected {}: channel not used", u.quantity.name(), role.quantity().name()));
-                uses.push(ChannelUse { name: c.name.clone(), unit_written: c.unit.clone(), unit_read: unit_text, used_as: "not used (wrong unit)".into() });
+                warn.push(
+                    "unit",
+                    place,
+                    format!(
+                        "unit `{unit_text}` is a {} unit, expected {}: channel not used",
+                        u.quantity.name(),
+                        role.quantity().name()
+                    ),
+                );
+                uses.push(ChannelUse {
+                    name: c.name.clone(),
+                    unit_written: c.unit.clone(),
+                    unit_read: unit_text,
+                    used_as: "not used (wrong unit)".into(),
+                });
                 continue;
             }
             Some(u) => {
-                return Err(ReadError::at(place, format!("unit `{unit_text}` is a {} unit; {} needs a {} unit", u.quantity.name(), c.name, role.quantity().name())));
+                return Err(ReadError::at(
+                    place,
+                    format!(
+                        "unit `{unit_text}` is a {} unit; {} needs a {} unit",
+                        u.quantity.name(),
+                        c.name,
+                        role.quantity().name()
+                    ),
+                ));
             }
             None if shown_only => {
                 warn.push("unit", place.clone(), format!("unknown unit `{unit_text}`: channel not used"));
-                uses.push(ChannelUse { name: c.name.clone(), unit_written: c.unit.clone(), unit_read: unit_text, used_as: "not used (unknown unit)".into() });
+                uses.push(ChannelUse {
+                    name: c.name.clone(),
+                    unit_written: c.unit.clone(),
+                    unit_read: unit_text,
+                    used_as: "not used (unknown unit)".into(),
+                });
                 continue;
             }
             None => {
                 return Err(ReadError::at(
                     place,
-                    format!("unknown unit `{unit_text}` (known for a {}: {})", role.quantity().name(), known_units(role.quantity())),
+                    format!(
+                        "unknown unit `{unit_text}` (known for a {}: {})",
+                        role.quantity().name(),
+                        known_units(role.quantity())
+                    ),
                 ));
             }
         };
@@ -288,14 +340,21 @@ pub fn interpret(table: &ChannelTable, family: Family, convention: Convention, w
             name: c.name.clone(),
             unit_written: c.unit.clone(),
             unit_read: unit_text,
-            used_as: if shown_only { role.tydex_name().into() } else { format!("{} [{}]", role.tydex_name(), role.quantity().target_unit()) },
+            used_as: if shown_only {
+                role.tydex_name().into()
+            } else {
+                format!("{} [{}]", role.tydex_name(), role.quantity().target_unit())
+            },
         });
     }
     if !assumed.is_empty() {
         warn.push(
             "units assumed",
             Place::file(file),
-            format!("no units in the file: TTC units assumed and checked against the magnitudes ({})", assumed.join(", ")),
+            format!(
+                "no units in the file: TTC units assumed and checked against the magnitudes ({})",
+                assumed.join(", ")
+            ),
         );
     }
     let read = |r: Role| -> Option<Vec<f64>> {
@@ -311,12 +370,18 @@ pub fn interpret(table: &ChannelTable, family: Family, convention: Convention, w
     let (convention, basis) = match (convention, loaded_median) {
         (Convention::Auto, Some(m)) => {
             let c = if m < 0.0 { Convention::Sae } else { Convention::IsoW };
-            let basis = format!("detected: FZ {} under load (median {m:.0} N)", if m < 0.0 { "negative" } else { "positive" });
+            let basis =
+                format!("detected: FZ {} under load (median {m:.0} N)", if m < 0.0 { "negative" } else { "positive" });
             if c != expected {
                 warn.push(
                     "convention",
                     Place::file(file).channel(&col(Role::Fz).map(|c| c.name.clone()).unwrap_or_default()),
-                    format!("{basis}: read as {}, though {} files are usually {} (override with --convention)", c.name(), if family == Family::Ttc { "TTC" } else { "TYDEX" }, expected.name()),
+                    format!(
+                        "{basis}: read as {}, though {} files are usually {} (override with --convention)",
+                        c.name(),
+                        if family == Family::Ttc { "TTC" } else { "TYDEX" },
+                        expected.name()
+                    ),
                 );
             }
             (c, basis)
@@ -336,7 +401,11 @@ pub fn interpret(table: &ChannelTable, family: Family, convention: Convention, w
     };
     for (r, what) in [(Role::Fy, "FY"), (Role::Fx, "FX"), (Role::Mz, "MZ"), (Role::Pressure, "P")] {
         if col(r).is_none() {
-            warn.push("missing channel", Place::file(file).channel(what), format!("no {} channel: taken as 0", r.tydex_name()));
+            warn.push(
+                "missing channel",
+                Place::file(file).channel(what),
+                format!("no {} channel: taken as 0", r.tydex_name()),
+            );
         }
     }
     // Time: ET, else the row index at an assumed 100 Hz.
@@ -371,7 +440,10 @@ pub fn interpret(table: &ChannelTable, family: Family, convention: Convention, w
             warn.push(
                 "degF as degC",
                 Place::file(file).channel(&col(Role::AmbientTemp).map(|c| c.name.clone()).unwrap_or_default()),
-                format!("ambient temperature median {m:.1} labelled degC is surely degF: converted ({:.1} degC)", (m - 32.0) * 5.0 / 9.0),
+                format!(
+                    "ambient temperature median {m:.1} labelled degC is surely degF: converted ({:.1} degC)",
+                    (m - 32.0) * 5.0 / 9.0
+                ),
             );
             for x in &mut a {
                 *x = (*x - 32.0) * 5.0 / 9.0;
@@ -408,7 +480,15 @@ pub fn interpret(table: &ChannelTable, family: Family, convention: Convention, w
             u.used_as.push_str(", sign flipped");
         }
     }
-    Ok(Interpreted { signals, channels: uses, convention, convention_basis: basis, kappa_source, kappa_channel, period_s })
+    Ok(Interpreted {
+        signals,
+        channels: uses,
+        convention,
+        convention_basis: basis,
+        kappa_source,
+        kappa_channel,
+        period_s,
+    })
 }
 
 fn known_units(q: Quantity) -> &'static str {

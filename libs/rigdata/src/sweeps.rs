@@ -293,7 +293,12 @@ fn excursions(x: &[f64], a: usize, b: usize, zero: f64, on: f64, idle: usize) ->
 }
 
 /// Finds the sweeps of a run. `test` is what the file says its test is, if it says.
-pub fn find_sweeps(sig: &Signals, kappa_source: KappaSource, test: Option<TestKind>, opt: &SweepOptions) -> Segmentation {
+pub fn find_sweeps(
+    sig: &Signals,
+    kappa_source: KappaSource,
+    test: Option<TestKind>,
+    opt: &SweepOptions,
+) -> Segmentation {
     let n = sig.fz_n.len();
     let mut why: Vec<Option<Exclusion>> = vec![None; n];
     let dt = {
@@ -522,7 +527,8 @@ fn mark_conditioning(sweeps: &mut [FoundSweep], fraction: f64) {
     }
 }
 
-/// Conditioning sweeps that follow each other at one cell, with only rolling between them, are
+/// Conditioning sweeps that follow each other at one cell, with only rolling (or the slip angle
+/// settling) between them, are
 /// one warm-up.
 fn merge_conditioning(sweeps: Vec<FoundSweep>, why: &[Option<Exclusion>]) -> Vec<FoundSweep> {
     let mut out: Vec<FoundSweep> = Vec::with_capacity(sweeps.len());
@@ -534,7 +540,9 @@ fn merge_conditioning(sweeps: Vec<FoundSweep>, why: &[Option<Exclusion>]) -> Vec
             && (p.cell.fz_n - s.cell.fz_n).abs() <= (0.05 * p.cell.fz_n.abs()).max(50.0)
             && (p.cell.p_pa - s.cell.p_pa).abs() <= 5_000.0
             && (p.cell.gamma_rad - s.cell.gamma_rad).abs() <= 0.5_f64.to_radians()
-            && why.get(p.last + 1..s.first).is_some_and(|gap| gap.iter().all(|w| matches!(w, None | Some(Exclusion::Idle))))
+            && why.get(p.last + 1..s.first).is_some_and(|gap| {
+                gap.iter().all(|w| matches!(w, None | Some(Exclusion::Idle | Exclusion::SlipAngleChange)))
+            })
         {
             p.last = s.last;
             p.cell.slip_reach = p.cell.slip_reach.max(s.cell.slip_reach);

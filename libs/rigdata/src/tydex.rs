@@ -73,7 +73,9 @@ pub struct TdxFile {
 /// (41–50), rest; a short line is split on whitespace instead (name, …, unit, numbers).
 fn fixed(line: &str) -> (String, String, String, String) {
     let chars: Vec<char> = line.chars().collect();
-    let part = |a: usize, b: usize| chars.get(a..b.min(chars.len())).map(|c| c.iter().collect::<String>().trim().to_owned()).unwrap_or_default();
+    let part = |a: usize, b: usize| {
+        chars.get(a..b.min(chars.len())).map(|c| c.iter().collect::<String>().trim().to_owned()).unwrap_or_default()
+    };
     if chars.len() > 50 && !chars[..10].iter().collect::<String>().trim().contains(' ') {
         return (part(0, 10), part(10, 40), part(40, 50), part(50, chars.len()));
     }
@@ -134,13 +136,24 @@ pub fn parse_tdx(text: &str, file: &str) -> Result<TdxFile, ReadError> {
                 let factor = match nums.next() {
                     Some(Ok(f)) if f.is_finite() && f != 0.0 => f,
                     Some(_) => {
-                        warn.push("factor", Place::line(file, ln).channel(&name), format!("conversion factor `{rest}` is not a non-zero number: 1 used"));
+                        warn.push(
+                            "factor",
+                            Place::line(file, ln).channel(&name),
+                            format!("conversion factor `{rest}` is not a non-zero number: 1 used"),
+                        );
                         1.0
                     }
                     None => 1.0,
                 };
                 let offset = nums.next().and_then(Result::ok).filter(|o| o.is_finite()).unwrap_or(0.0);
-                out.channels.push(TdxChannel { name: name.to_ascii_uppercase(), description, unit, factor, offset, line: ln });
+                out.channels.push(TdxChannel {
+                    name: name.to_ascii_uppercase(),
+                    description,
+                    unit,
+                    factor,
+                    offset,
+                    line: ln,
+                });
             }
             "data" => {
                 if out.channels.is_empty() {
@@ -153,8 +166,16 @@ pub fn parse_tdx(text: &str, file: &str) -> Result<TdxFile, ReadError> {
                     match w.parse::<f64>() {
                         Ok(v) => pending.push(v),
                         Err(_) => {
-                            let ch = out.channels.get((pending.len()) % out.channels.len()).map(|c| c.name.clone()).unwrap_or_default();
-                            warn.push("not a number", Place::line(file, ln).channel(&ch), format!("value {} `{w}` is not a number: read as NaN", k + 1));
+                            let ch = out
+                                .channels
+                                .get((pending.len()) % out.channels.len())
+                                .map(|c| c.name.clone())
+                                .unwrap_or_default();
+                            warn.push(
+                                "not a number",
+                                Place::line(file, ln).channel(&ch),
+                                format!("value {} `{w}` is not a number: read as NaN", k + 1),
+                            );
                             pending.push(f64::NAN);
                         }
                     }
@@ -248,7 +269,12 @@ impl TdxFile {
     /// holds (value × factor + offset is SI) and the channel is given in SI, with a warning.
     pub fn to_table(&self, file: &str) -> (ChannelTable, Vec<Warning>) {
         let mut warn = Warnings::default();
-        let mut table = ChannelTable { source: file.to_owned(), tire_id: self.tyre_id(), test_id: self.test_id(), ..Default::default() };
+        let mut table = ChannelTable {
+            source: file.to_owned(),
+            tire_id: self.tyre_id(),
+            test_id: self.test_id(),
+            ..Default::default()
+        };
         table.title = self.value("MEASID").map(|m| format!("TYDEX measurement {m}"));
         for (k, c) in self.channels.iter().enumerate() {
             let place = Place::line(file, c.line).channel(&c.name);
@@ -279,7 +305,11 @@ impl TdxFile {
                 }
                 (Some(r), None) if !identity || c.unit.trim().is_empty() => {
                     if !c.unit.trim().is_empty() {
-                        warn.push("factor", place, format!("unit `{}` unknown: the conversion factor to SI used", c.unit));
+                        warn.push(
+                            "factor",
+                            place,
+                            format!("unit `{}` unknown: the conversion factor to SI used", c.unit),
+                        );
                     }
                     (si_name(r.quantity()).to_owned(), values.iter().map(|v| v * c.factor + c.offset).collect())
                 }
@@ -291,7 +321,11 @@ impl TdxFile {
         if table.column("INFLPRES").is_none()
             && let Some((p, name)) = self.constant_si(&["NOMPRES", "INFLPRES", "PRESSURE"])
         {
-            warn.push("constant", Place::file(file).channel(&name), format!("no INFLPRES channel: the constant {name} = {:.0} Pa used", p));
+            warn.push(
+                "constant",
+                Place::file(file).channel(&name),
+                format!("no INFLPRES channel: the constant {name} = {:.0} Pa used", p),
+            );
             let n = table.rows();
             table.columns.push(Column { name: "INFLPRES".into(), unit: "Pa".into(), values: vec![p; n] });
         }
@@ -318,18 +352,66 @@ const CHANNELS: [Chan; 19] = [
     Chan { name: "MXW", desc: "Overturning moment", unit: "Nm", get: |s| s.mx_nm, set: |s, v| s.mx_nm = v },
     Chan { name: "MYW", desc: "Rolling resistance moment", unit: "Nm", get: |s| s.my_nm, set: |s, v| s.my_nm = v },
     Chan { name: "MZW", desc: "Aligning moment", unit: "Nm", get: |s| s.mz_nm, set: |s, v| s.mz_nm = v },
-    Chan { name: "SLIPANGL", desc: "Slip angle", unit: "deg", get: |s| s.alpha_rad.to_degrees(), set: |s, v| s.alpha_rad = v.to_radians() },
+    Chan {
+        name: "SLIPANGL",
+        desc: "Slip angle",
+        unit: "deg",
+        get: |s| s.alpha_rad.to_degrees(),
+        set: |s, v| s.alpha_rad = v.to_radians(),
+    },
     Chan { name: "LONGSLIP", desc: "Longitudinal slip", unit: "-", get: |s| s.kappa, set: |s, v| s.kappa = v },
-    Chan { name: "INCLANGL", desc: "Inclination angle", unit: "deg", get: |s| s.gamma_rad.to_degrees(), set: |s, v| s.gamma_rad = v.to_radians() },
+    Chan {
+        name: "INCLANGL",
+        desc: "Inclination angle",
+        unit: "deg",
+        get: |s| s.gamma_rad.to_degrees(),
+        set: |s, v| s.gamma_rad = v.to_radians(),
+    },
     Chan { name: "INFLPRES", desc: "Inflation pressure", unit: "Pa", get: |s| s.p_pa, set: |s, v| s.p_pa = v },
     Chan { name: "TRAJVELW", desc: "Forward velocity", unit: "m/s", get: |s| s.vx_mps, set: |s, v| s.vx_mps = v },
-    Chan { name: "ROTSPEED", desc: "Wheel rotational speed", unit: "rad/s", get: |s| s.omega_radps, set: |s, v| s.omega_radps = v },
+    Chan {
+        name: "ROTSPEED",
+        desc: "Wheel rotational speed",
+        unit: "rad/s",
+        get: |s| s.omega_radps,
+        set: |s, v| s.omega_radps = v,
+    },
     Chan { name: "DSTWOWHC", desc: "Wheel centre to ground", unit: "m", get: |s| s.rl_m, set: |s, v| s.rl_m = v },
-    Chan { name: "TRDTEMPI", desc: "Tread temperature inner", unit: "degC", get: |s| s.temp_inner_c, set: |s, v| s.temp_inner_c = v },
-    Chan { name: "TRDTEMPC", desc: "Tread temperature centre", unit: "degC", get: |s| s.temp_c, set: |s, v| s.temp_c = v },
-    Chan { name: "TRDTEMPO", desc: "Tread temperature outer", unit: "degC", get: |s| s.temp_outer_c, set: |s, v| s.temp_outer_c = v },
-    Chan { name: "ROADTEMP", desc: "Road surface temperature", unit: "degC", get: |s| s.road_temp_c, set: |s, v| s.road_temp_c = v },
-    Chan { name: "LONGDISP", desc: "Longitudinal displacement", unit: "m", get: |s| s.dist_m, set: |s, v| s.dist_m = v },
+    Chan {
+        name: "TRDTEMPI",
+        desc: "Tread temperature inner",
+        unit: "degC",
+        get: |s| s.temp_inner_c,
+        set: |s, v| s.temp_inner_c = v,
+    },
+    Chan {
+        name: "TRDTEMPC",
+        desc: "Tread temperature centre",
+        unit: "degC",
+        get: |s| s.temp_c,
+        set: |s, v| s.temp_c = v,
+    },
+    Chan {
+        name: "TRDTEMPO",
+        desc: "Tread temperature outer",
+        unit: "degC",
+        get: |s| s.temp_outer_c,
+        set: |s, v| s.temp_outer_c = v,
+    },
+    Chan {
+        name: "ROADTEMP",
+        desc: "Road surface temperature",
+        unit: "degC",
+        get: |s| s.road_temp_c,
+        set: |s, v| s.road_temp_c = v,
+    },
+    Chan {
+        name: "LONGDISP",
+        desc: "Longitudinal displacement",
+        unit: "m",
+        get: |s| s.dist_m,
+        set: |s, v| s.dist_m = v,
+    },
 ];
 
 fn kind_name(k: DataKind) -> &'static str {
@@ -362,14 +444,24 @@ fn kind_of(s: &str) -> Option<DataKind> {
 pub fn to_tydex(data: &Dataset, measid: &str) -> String {
     let mut s = String::new();
     let _ = writeln!(s, "**HEADER\nRELEASE   1.3\nMEASID    {measid}\nSUPPLIER  tyrerig\nDATE      -\n");
-    let _ = writeln!(s, "**COMMENTS\nISO-W axes (TYDEX-W), contact-patch centred; SI units unless the channel says otherwise.");
+    let _ = writeln!(
+        s,
+        "**COMMENTS\nISO-W axes (TYDEX-W), contact-patch centred; SI units unless the channel says otherwise."
+    );
     if let Some(f) = data.fnomin_n {
         let _ = writeln!(s, "FNOMIN {f}");
     }
     // Names never hold whitespace in our logs; replace it so the line splits cleanly.
     let clean = |t: &str| if t.is_empty() { "-".to_owned() } else { t.replace(char::is_whitespace, "_") };
     for (i, seg) in data.segments.iter().enumerate() {
-        let _ = writeln!(s, "SEGMENT {i} {} {} {} {}", seg.procedure.name(), kind_name(seg.kind), clean(&seg.section), clean(&seg.sweep));
+        let _ = writeln!(
+            s,
+            "SEGMENT {i} {} {} {} {}",
+            seg.procedure.name(),
+            kind_name(seg.kind),
+            clean(&seg.section),
+            clean(&seg.sweep)
+        );
     }
     if let Some(f) = data.fnomin_n {
         let _ = writeln!(s, "\n**CONSTANTS\n{:<10}{:<30}{:<10}{f}", "FNOMIN", "Nominal load", "N");
@@ -413,16 +505,27 @@ pub fn read_own(tdx: &TdxFile, file: &str) -> Result<(Dataset, Vec<Warning>), Re
                 "FreeRolling" => Procedure::FreeRolling,
                 "BrkDrv" => Procedure::BrkDrv,
                 "StaticLong" => Procedure::StaticLong,
-                other => return Err(ReadError::at(Place::file(file), format!("**COMMENTS: unknown procedure `{other}` in `{c}`"))),
+                other => {
+                    return Err(ReadError::at(
+                        Place::file(file),
+                        format!("**COMMENTS: unknown procedure `{other}` in `{c}`"),
+                    ));
+                }
             };
-            let kind = kind_of(w[3]).ok_or_else(|| ReadError::at(Place::file(file), format!("**COMMENTS: unknown segment kind `{}`", w[3])))?;
+            let kind = kind_of(w[3]).ok_or_else(|| {
+                ReadError::at(Place::file(file), format!("**COMMENTS: unknown segment kind `{}`", w[3]))
+            })?;
             let un = |x: &str| if x == "-" { String::new() } else { x.to_owned() };
             meta.push((procedure, kind, un(w[4]), un(w[5])));
         } else if w.first() == Some(&"FNOMIN") && w.len() >= 2 {
             fnomin = w[1].parse().ok();
         }
     }
-    let seg_col = tdx.channels.iter().position(|c| c.name == "SEGMENT").ok_or_else(|| ReadError::at(Place::file(file), "no SEGMENT channel"))?;
+    let seg_col = tdx
+        .channels
+        .iter()
+        .position(|c| c.name == "SEGMENT")
+        .ok_or_else(|| ReadError::at(Place::file(file), "no SEGMENT channel"))?;
     // Each known channel with the unit conversion its unit line implies.
     let setters: Vec<(usize, &Chan, units::Unit)> = tdx
         .channels
@@ -433,7 +536,11 @@ pub fn read_own(tdx: &TdxFile, file: &str) -> Result<(Dataset, Vec<Warning>), Re
             let written = units::parse(&c.unit)?;
             let ours = units::parse(ch.unit)?;
             // Value in our unit = (value in the written unit → fitter unit) → our unit.
-            let u = units::Unit { quantity: written.quantity, scale: written.scale / ours.scale, offset: (written.offset - ours.offset) / ours.scale };
+            let u = units::Unit {
+                quantity: written.quantity,
+                scale: written.scale / ours.scale,
+                offset: (written.offset - ours.offset) / ours.scale,
+            };
             Some((k, ch, u))
         })
         .collect();
@@ -441,7 +548,10 @@ pub fn read_own(tdx: &TdxFile, file: &str) -> Result<(Dataset, Vec<Warning>), Re
     for (ln, row) in &tdx.rows {
         let idx = row[seg_col];
         if !(idx >= 0.0 && idx < meta.len() as f64 && idx.fract() == 0.0) {
-            return Err(ReadError::at(Place::line(file, *ln).channel("SEGMENT"), format!("segment index {idx} not listed in **COMMENTS")));
+            return Err(ReadError::at(
+                Place::line(file, *ln).channel("SEGMENT"),
+                format!("segment index {idx} not listed in **COMMENTS"),
+            ));
         }
         let i = idx as usize;
         while segments.len() <= i {

@@ -23,7 +23,10 @@ fn assert_found(run: &FixtureRun, d: &Dataset, r: &FileReport) {
         let c = s.cell.expect("cell");
         assert_eq!(c.kind, p.kind, "{}", s.sweep);
         assert_eq!(s.kind == DataKind::WarmUp, p.conditioning, "{}", s.sweep);
-        assert_eq!(s.procedure, if p.kind == SweepKind::Cornering { Procedure::FreeRolling } else { Procedure::BrkDrv });
+        assert_eq!(
+            s.procedure,
+            if p.kind == SweepKind::Cornering { Procedure::FreeRolling } else { Procedure::BrkDrv }
+        );
         assert!((c.fz_n - p.fz_n).abs() < 0.03 * p.fz_n, "{}: FZ {} vs {}", s.sweep, c.fz_n, p.fz_n);
         assert!((c.p_pa / 1e3 - p.p_kpa).abs() < 1.0, "{}: P {} vs {}", s.sweep, c.p_pa, p.p_kpa);
         assert!((c.gamma_rad.to_degrees() - p.ia_deg).abs() < 0.1, "{}", s.sweep);
@@ -51,9 +54,17 @@ fn cornering_run_every_sweep_found_with_its_cell() {
     // SL is exactly 0 in cornering, and that is what the samples carry (not SR).
     assert!(d.segments.iter().flat_map(|s| &s.samples).all(|x| x.kappa == 0.0));
     // Repeats at one cell are kept apart and numbered.
-    assert!(d.segments.iter().any(|s| s.sweep == "cornering P83kPa FZ1100N IA0 #2"), "{:?}", d.segments.iter().map(|s| &s.sweep).collect::<Vec<_>>());
+    assert!(
+        d.segments.iter().any(|s| s.sweep == "cornering P83kPa FZ1100N IA0 #2"),
+        "{:?}",
+        d.segments.iter().map(|s| &s.sweep).collect::<Vec<_>>()
+    );
     // ISO-W: a positive slip angle gives a negative FY at small slip.
-    let s = d.segments[1].samples.iter().find(|x| x.alpha_rad > 2f64.to_radians() && x.alpha_rad < 4f64.to_radians()).unwrap();
+    let s = d.segments[1]
+        .samples
+        .iter()
+        .find(|x| x.alpha_rad > 2f64.to_radians() && x.alpha_rad < 4f64.to_radians())
+        .unwrap();
     assert!(s.fy_n < 0.0 && s.mz_nm > 0.0, "{s:?}");
     // The ambient temperature in °F labelled °C is caught.
     assert!(r.warnings.iter().any(|w| w.message.contains("surely degF")), "{:?}", r.warnings);
@@ -102,7 +113,16 @@ fn assert_same(a: &Dataset, b: &Dataset, tol: f64) {
         assert_eq!((&x.sweep, x.kind, x.procedure), (&y.sweep, y.kind, y.procedure));
         assert_eq!(x.samples.len(), y.samples.len(), "{}", x.sweep);
         for (p, q) in x.samples.iter().zip(&y.samples) {
-            for (u, v) in [(p.fz_n, q.fz_n), (p.fy_n, q.fy_n), (p.alpha_rad, q.alpha_rad), (p.kappa, q.kappa), (p.p_pa, q.p_pa), (p.mz_nm, q.mz_nm), (p.rl_m, q.rl_m), (p.temp_c, q.temp_c)] {
+            for (u, v) in [
+                (p.fz_n, q.fz_n),
+                (p.fy_n, q.fy_n),
+                (p.alpha_rad, q.alpha_rad),
+                (p.kappa, q.kappa),
+                (p.p_pa, q.p_pa),
+                (p.mz_nm, q.mz_nm),
+                (p.rl_m, q.rl_m),
+                (p.temp_c, q.temp_c),
+            ] {
                 assert!((u - v).abs() <= tol * u.abs().max(1.0), "{}: {u} vs {v}", x.sweep);
             }
         }

@@ -55,7 +55,8 @@ fn mat_written_with_every_option_reads_back_identically() {
             for layout in [MatLayout::Variables, MatLayout::Struct("data".into())] {
                 for narrow_integers in [false, true] {
                     for chars in [CharEncoding::Utf16, CharEncoding::Utf8] {
-                        let opt = MatWriteOptions { compress, big_endian, layout: layout.clone(), narrow_integers, chars };
+                        let opt =
+                            MatWriteOptions { compress, big_endian, layout: layout.clone(), narrow_integers, chars };
                         let bytes = to_mat(&t, &opt).unwrap();
                         let m = parse_mat(&bytes, "x.mat").unwrap_or_else(|e| panic!("{opt:?}: {e}"));
                         assert!(m.warnings.is_empty(), "{opt:?}: {:?}", m.warnings);
@@ -64,7 +65,11 @@ fn mat_written_with_every_option_reads_back_identically() {
                         assert_eq!(m.table.columns.len(), t.columns.len());
                         for (a, b) in t.columns.iter().zip(&m.table.columns) {
                             assert_eq!(a.name, b.name);
-                            assert!(a.values.iter().zip(&b.values).all(|(x, y)| x.to_bits() == y.to_bits()), "{opt:?}: {}", a.name);
+                            assert!(
+                                a.values.iter().zip(&b.values).all(|(x, y)| x.to_bits() == y.to_bits()),
+                                "{opt:?}: {}",
+                                a.name
+                            );
                         }
                     }
                 }
@@ -136,8 +141,15 @@ fn one_run_in_other_units_and_axes_gives_one_dataset() {
 
 #[test]
 fn own_tydex_export_reads_back_exactly() {
-    let truth = mftyre::TyreParams::read_tir(std::path::Path::new(concat!(env!("CARGO_MANIFEST_DIR"), "/../../launch-config/tyres/MagicFormula61_Paramerters.tir"))).unwrap();
-    let d = mffit::synth::gs2mf(&truth, mffit::synth::SynthOptions { rate_hz: 10.0, noise: mffit::synth::Noise::RIG, ..Default::default() });
+    let truth = mftyre::TyreParams::read_tir(std::path::Path::new(concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/../../launch-config/tyres/MagicFormula61_Paramerters.tir"
+    )))
+    .unwrap();
+    let d = mffit::synth::gs2mf(
+        &truth,
+        mffit::synth::SynthOptions { rate_hz: 10.0, noise: mffit::synth::Noise::RIG, ..Default::default() },
+    );
     let text = rigdata::tydex::to_tydex(&d, "x");
     let (back, r) = read_bytes(text.as_bytes(), "x.tdx", FileFormat::Tdx, &ReadOptions::default()).unwrap();
     assert!(r.format.contains("tyrerig export"));
@@ -166,7 +178,10 @@ fn own_tydex_export_reads_back_exactly() {
                 (x.dist_m, y.dist_m),
             ];
             for (i, (u, v)) in pairs.iter().enumerate() {
-                assert!((u - v).abs() <= 1e-10 * u.abs().max(1.0) || (u.is_nan() && v.is_nan()), "channel {i}: {u} vs {v}");
+                assert!(
+                    (u - v).abs() <= 1e-10 * u.abs().max(1.0) || (u.is_nan() && v.is_nan()),
+                    "channel {i}: {u} vs {v}"
+                );
             }
         }
     }
@@ -189,7 +204,9 @@ fn foreign_tdx(t: &ChannelTable, rows: std::ops::Range<usize>, id: usize) -> Str
         ("SL", "LONGSLIP", "-", 1.0, 1.0, 1.0),
         ("TSTC", "TRDTEMPC", "degC", 1.0, 1.0, 1.0),
     ];
-    let mut s = format!("**HEADER\nRELEASE   1.3\nMEASID    m{id}\nMANUFACT  Fixture\nTYRESIZE  20.5x7.0-13\n\n**COMMENTS\nforeign file\n\n**CONSTANTS\n");
+    let mut s = format!(
+        "**HEADER\nRELEASE   1.3\nMEASID    m{id}\nMANUFACT  Fixture\nTYRESIZE  20.5x7.0-13\n\n**COMMENTS\nforeign file\n\n**CONSTANTS\n"
+    );
     let _ = writeln!(s, "{:<10}{:<30}{:<10}{}", "FNOMIN", "Nominal load", "kN", "1.1");
     let _ = writeln!(s, "{:<10}{:<30}{:<10}{}", "TESTMETH", "Test method", "-", "Drive/Brake/Combined");
     s.push_str("\n**MEASURCHNLS\n");
@@ -213,7 +230,9 @@ fn foreign_tdx(t: &ChannelTable, rows: std::ops::Range<usize>, id: usize) -> Str
 fn folder_of_foreign_tydex_files_gives_the_ttc_sweeps() {
     let run = ttc_run(&FixtureSpec::drive_brake());
     let t = &run.table;
-    let (d, r) = read_bytes(to_dat(t, DatLayout::default()).as_bytes(), "db.dat", FileFormat::Dat, &ReadOptions::default()).unwrap();
+    let (d, r) =
+        read_bytes(to_dat(t, DatLayout::default()).as_bytes(), "db.dat", FileFormat::Dat, &ReadOptions::default())
+            .unwrap();
     let dir = tempfile::tempdir().unwrap();
     // One file per sweep, 1 s of rolling either side, as a rig writes one measurement.
     for (i, s) in d.segments.iter().enumerate() {
@@ -232,11 +251,21 @@ fn folder_of_foreign_tydex_files_gives_the_ttc_sweeps() {
     assert_eq!((warm(&imp.dataset), warm(&d)), (2, 1));
     let fitted = |d: &Dataset| d.segments.iter().filter(|s| s.kind == DataKind::Sweep).cloned().collect::<Vec<_>>();
     let (got, want) = (fitted(&imp.dataset), fitted(&d));
-    assert_eq!(got.iter().map(|s| s.cell.unwrap().kind).collect::<Vec<_>>(), want.iter().map(|s| s.cell.unwrap().kind).collect::<Vec<_>>());
+    assert_eq!(
+        got.iter().map(|s| s.cell.unwrap().kind).collect::<Vec<_>>(),
+        want.iter().map(|s| s.cell.unwrap().kind).collect::<Vec<_>>()
+    );
     for (x, y) in got.iter().zip(&want) {
         assert_eq!(x.sweep, y.sweep);
         let (cx, cy) = (x.cell.unwrap(), y.cell.unwrap());
-        assert!((cx.fz_n - cy.fz_n).abs() < 5.0 && (cx.p_pa - cy.p_pa).abs() < 300.0 && (cx.alpha_rad - cy.alpha_rad).abs() < 1e-3, "{} vs {}", x.sweep, y.sweep);
+        assert!(
+            (cx.fz_n - cy.fz_n).abs() < 5.0
+                && (cx.p_pa - cy.p_pa).abs() < 300.0
+                && (cx.alpha_rad - cy.alpha_rad).abs() < 1e-3,
+            "{} vs {}",
+            x.sweep,
+            y.sweep
+        );
     }
     let f = &imp.inspection.files[0];
     assert_eq!(f.convention, "ISO-W");
@@ -259,7 +288,14 @@ fn imported_dataset_survives_the_mcap_log_with_its_cells() {
         // Through JSON the cell keeps its values to the last digit or two.
         let (x, y) = (a.cell.unwrap(), b.cell.unwrap());
         assert_eq!(x.kind, y.kind);
-        for (u, v) in [(x.fz_n, y.fz_n), (x.p_pa, y.p_pa), (x.gamma_rad, y.gamma_rad), (x.alpha_rad, y.alpha_rad), (x.vx_mps, y.vx_mps), (x.slip_reach, y.slip_reach)] {
+        for (u, v) in [
+            (x.fz_n, y.fz_n),
+            (x.p_pa, y.p_pa),
+            (x.gamma_rad, y.gamma_rad),
+            (x.alpha_rad, y.alpha_rad),
+            (x.vx_mps, y.vx_mps),
+            (x.slip_reach, y.slip_reach),
+        ] {
             assert!((u - v).abs() <= 1e-12 * u.abs().max(1e-9), "{u} vs {v}");
         }
         assert_eq!(a.samples.len(), b.samples.len());

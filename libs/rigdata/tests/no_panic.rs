@@ -56,7 +56,10 @@ fn damage() -> impl Strategy<Value = Damage> {
     prop_oneof![
         (0.0..1.0f64).prop_map(Damage::Truncate),
         prop::collection::vec((0.0..1.0f64, any::<u8>()), 1..8).prop_map(Damage::Flip),
-        (0.0..1.0f64, prop_oneof![Just(u32::MAX), Just(0x7fff_ffff), Just(0xffff_0000), Just(0x0004_0009), Just(0), any::<u32>()])
+        (
+            0.0..1.0f64,
+            prop_oneof![Just(u32::MAX), Just(0x7fff_ffff), Just(0xffff_0000), Just(0x0004_0009), Just(0), any::<u32>()]
+        )
             .prop_map(|(at, w)| Damage::Word(at, w)),
     ]
 }

@@ -182,7 +182,12 @@ pub fn run_import(cmd: ImportCmd) -> Result<()> {
     for f in files_of(&a.path)? {
         let is_tdx = FileFormat::of(&f) == Some(FileFormat::Tdx);
         if ttc == is_tdx {
-            bail!("{}: {} file; use `tyrerig import {}`", f.display(), if is_tdx { "a TYDEX" } else { "not a TYDEX" }, if is_tdx { "tydex" } else { "ttc" });
+            bail!(
+                "{}: {} file; use `tyrerig import {}`",
+                f.display(),
+                if is_tdx { "a TYDEX" } else { "not a TYDEX" },
+                if is_tdx { "tydex" } else { "ttc" }
+            );
         }
     }
     let mut import = read_path(&a.path, &a.read.options())?;

@@ -85,20 +85,31 @@ struct Element<'a> {
 
 /// Reads the element at `at` of `b`; `var` names the variable in errors.
 fn element<'a>(cx: &Ctx, b: &'a [u8], at: usize, var: &str) -> Result<Element<'a>, ReadError> {
-    let first = cx.u32_at(b, at).ok_or_else(|| cx.err(var, format!("file ends inside a data element tag at byte {at}")))?;
+    let first =
+        cx.u32_at(b, at).ok_or_else(|| cx.err(var, format!("file ends inside a data element tag at byte {at}")))?;
     if first >> 16 != 0 {
         // Small data element: count in the upper half, type in the lower, data in the next 4 bytes.
         let n = (first >> 16) as usize;
         if n > 4 {
             return Err(cx.err(var, format!("small data element at byte {at} claims {n} bytes (at most 4)")));
         }
-        let data = b.get(at + 4..at + 4 + n).ok_or_else(|| cx.err(var, format!("file ends inside the element at byte {at}")))?;
+        let data = b
+            .get(at + 4..at + 4 + n)
+            .ok_or_else(|| cx.err(var, format!("file ends inside the element at byte {at}")))?;
         return Ok(Element { ty: first & 0xffff, data, next: at + 8 });
     }
-    let n = cx.u32_at(b, at + 4).ok_or_else(|| cx.err(var, format!("file ends inside a data element tag at byte {at}")))? as usize;
+    let n = cx
+        .u32_at(b, at + 4)
+        .ok_or_else(|| cx.err(var, format!("file ends inside a data element tag at byte {at}")))? as usize;
     let start = at + 8;
     let end = start.checked_add(n).filter(|&e| e <= b.len()).ok_or_else(|| {
-        cx.err(var, format!("element at byte {at} claims {n} bytes but only {} remain (truncated or corrupt file)", b.len().saturating_sub(start)))
+        cx.err(
+            var,
+            format!(
+                "element at byte {at} claims {n} bytes but only {} remain (truncated or corrupt file)",
+                b.len().saturating_sub(start)
+            ),
+        )
     })?;
     // Elements are padded to 8 bytes, except compressed ones.
     let next = if first == ty::COMPRESSED { end } else { end.div_ceil(8) * 8 };
@@ -110,7 +121,9 @@ fn numbers(cx: &Ctx, e: &Element, var: &str) -> Result<Vec<f64>, ReadError> {
     macro_rules! conv {
         ($t:ty, $n:expr) => {{
             if e.data.len() % $n != 0 {
-                return Err(cx.err(var, format!("{} bytes of data is not a whole number of {}-byte values", e.data.len(), $n)));
+                return Err(
+                    cx.err(var, format!("{} bytes of data is not a whole number of {}-byte values", e.data.len(), $n))
+                );
             }
             e.data
                 .chunks_exact($n)
@@ -150,13 +163,13 @@ fn text_of(cx: &Ctx, e: &Element, var: &str) -> Result<String, ReadError> {
             String::from_utf16_lossy(&u)
         }
         ty::UTF8 | ty::UINT8 | ty::INT8 => String::from_utf8_lossy(e.data).into_owned(),
-        ty::UTF32 | ty::UINT32 | ty::INT32 => {
-            numbers(cx, &Element { ty: ty::UINT32, data: e.data, next: 0 }, var)?
-                .into_iter()
-                .map(|c| char::from_u32(c as u32).unwrap_or('\u{fffd}'))
-                .collect()
+        ty::UTF32 | ty::UINT32 | ty::INT32 => numbers(cx, &Element { ty: ty::UINT32, data: e.data, next: 0 }, var)?
+            .into_iter()
+            .map(|c| char::from_u32(c as u32).unwrap_or('\u{fffd}'))
+            .collect(),
+        ty::DOUBLE => {
+            numbers(cx, e, var)?.into_iter().map(|c| char::from_u32(c as u32).unwrap_or('\u{fffd}')).collect()
         }
-        ty::DOUBLE => numbers(cx, e, var)?.into_iter().map(|c| char::from_u32(c as u32).unwrap_or('\u{fffd}')).collect(),
         other => return Err(cx.err(var, format!("char array stored as data type {other}"))),
     })
 }
@@ -191,7 +204,10 @@ fn matrix(cx: &mut Ctx, b: &[u8], depth: usize, parent: &str) -> Result<(String,
     }
     let flags = element(cx, b, 0, parent)?;
     if flags.ty != ty::UINT32 || flags.data.len() < 4 {
-        return Err(cx.err(parent, format!("array flags expected (uint32), found type {} of {} bytes", flags.ty, flags.data.len())));
+        return Err(cx.err(
+            parent,
+            format!("array flags expected (uint32), found type {} of {} bytes", flags.ty, flags.data.len()),
+        ));
     }
     let f0 = cx.u32_at(flags.data, 0).unwrap_or(0);
     let cls = (f0 & 0xff) as u8;
@@ -222,7 +238,10 @@ fn matrix(cx: &mut Ctx, b: &[u8], depth: usize, parent: &str) -> Result<(String,
             at = re.next;
             let values = numbers(cx, &re, &here)?;
             if values.len() != count {
-                return Err(cx.err(&here, format!("dimensions {} say {count} values, the data holds {}", dims_text(&dims), values.len())));
+                return Err(cx.err(
+                    &here,
+                    format!("dimensions {} say {count} values, the data holds {}", dims_text(&dims), values.len()),
+                ));
             }
             if complex {
                 // The imaginary part follows; rig data has none worth keeping.
@@ -244,21 +263,37 @@ fn matrix(cx: &mut Ctx, b: &[u8], depth: usize, parent: &str) -> Result<(String,
             let fe = element(cx, b, le.next, &here)?;
             at = fe.next;
             if len == 0 || fe.data.len() % len != 0 {
-                return Err(cx.err(&here, format!("struct field names of {} bytes do not divide into names of {len}", fe.data.len())));
+                return Err(cx.err(
+                    &here,
+                    format!("struct field names of {} bytes do not divide into names of {len}", fe.data.len()),
+                ));
             }
             let names: Vec<String> =
                 fe.data.chunks(len).map(|c| String::from_utf8_lossy(c).trim_end_matches('\0').to_owned()).collect();
             // Every field of every element is at least an 8-byte tag: bound the count by the bytes.
-            let total = count.checked_mul(names.len()).filter(|&t| t <= b.len().saturating_sub(at) / 8).ok_or_else(|| {
-                cx.err(&here, format!("struct {} with {} fields cannot fit in {} bytes", dims_text(&dims), names.len(), b.len() - at))
-            })?;
+            let total =
+                count.checked_mul(names.len()).filter(|&t| t <= b.len().saturating_sub(at) / 8).ok_or_else(|| {
+                    cx.err(
+                        &here,
+                        format!(
+                            "struct {} with {} fields cannot fit in {} bytes",
+                            dims_text(&dims),
+                            names.len(),
+                            b.len() - at
+                        ),
+                    )
+                })?;
             let mut fields: Vec<(String, Vec<Value>)> = names.into_iter().map(|n| (n, Vec::new())).collect();
             let nf = fields.len();
             for k in 0..total {
                 let e = element(cx, b, at, &here)?;
                 at = e.next;
                 let fname = format!("{here}.{}", fields[k % nf].0);
-                let v = if e.ty == ty::MATRIX { matrix(cx, e.data, depth + 1, &fname)?.1 } else { Value::Other { class: 0 } };
+                let v = if e.ty == ty::MATRIX {
+                    matrix(cx, e.data, depth + 1, &fname)?.1
+                } else {
+                    Value::Other { class: 0 }
+                };
                 fields[k % nf].1.push(v);
             }
             Value::Struct { dims, fields }
@@ -314,7 +349,11 @@ fn level5(cx: &mut Ctx, b: &[u8]) -> Result<Vec<(String, Value)>, ReadError> {
                 matrix(cx, inner.data, 0, &label)
             }),
             other => {
-                cx.warn.push("element", Place::file(cx.file), format!("{label}: data element of type {other} at top level skipped"));
+                cx.warn.push(
+                    "element",
+                    Place::file(cx.file),
+                    format!("{label}: data element of type {other} at top level skipped"),
+                );
                 continue;
             }
         };
@@ -343,8 +382,12 @@ fn level4(cx: &mut Ctx, b: &[u8]) -> Result<Vec<(String, Value)>, ReadError> {
         if !(0..=1).contains(&m) || o != 0 || !(0..=5).contains(&p) || !(0..=2).contains(&t) {
             return Err(bad());
         }
-        let (rows, cols, imagf, namlen) =
-            (hdr(be, 1).ok_or_else(bad)?, hdr(be, 2).ok_or_else(bad)?, hdr(be, 3).ok_or_else(bad)?, hdr(be, 4).ok_or_else(bad)?);
+        let (rows, cols, imagf, namlen) = (
+            hdr(be, 1).ok_or_else(bad)?,
+            hdr(be, 2).ok_or_else(bad)?,
+            hdr(be, 3).ok_or_else(bad)?,
+            hdr(be, 4).ok_or_else(bad)?,
+        );
         if rows < 0 || cols < 0 || !(0..=1).contains(&imagf) || !(1..=4096).contains(&namlen) {
             return Err(bad());
         }
@@ -387,7 +430,8 @@ const HDF5_SIGNATURE: &[u8] = b"\x89HDF\r\n\x1a\n";
 /// Parses the bytes of a `.mat` file; `file` names it in messages.
 pub fn parse_mat(b: &[u8], file: &str) -> Result<MatFile, ReadError> {
     let mut cx = Ctx { file, be: false, warn: Warnings::default() };
-    let is_hdf5 = b.starts_with(HDF5_SIGNATURE) || b.get(512..520) == Some(HDF5_SIGNATURE) || b.starts_with(b"MATLAB 7.3");
+    let is_hdf5 =
+        b.starts_with(HDF5_SIGNATURE) || b.get(512..520) == Some(HDF5_SIGNATURE) || b.starts_with(b"MATLAB 7.3");
     if is_hdf5 {
         return Err(ReadError::at(
             Place::file(file),
@@ -397,15 +441,24 @@ pub fn parse_mat(b: &[u8], file: &str) -> Result<MatFile, ReadError> {
     let (vars, format) = match b.get(126..128) {
         Some(e) if e == b"IM" || e == b"MI" => {
             cx.be = e == b"MI";
-            let version = if cx.be { u16::from_be_bytes([b[124], b[125]]) } else { u16::from_le_bytes([b[124], b[125]]) };
+            let version =
+                if cx.be { u16::from_be_bytes([b[124], b[125]]) } else { u16::from_le_bytes([b[124], b[125]]) };
             if version != 0x0100 {
-                cx.warn.push("version", Place::file(file), format!("header version {version:#06x}, expected 0x0100: read as Level 5"));
+                cx.warn.push(
+                    "version",
+                    Place::file(file),
+                    format!("header version {version:#06x}, expected 0x0100: read as Level 5"),
+                );
             }
             let text = String::from_utf8_lossy(&b[..116]).trim_end_matches(['\0', ' ']).to_owned();
             let fmt = format!(
                 "MATLAB Level 5 ({}-endian){}",
                 if cx.be { "big" } else { "little" },
-                text.split(',').next().filter(|s| s.starts_with("MATLAB")).map(|s| format!(": {s}")).unwrap_or_default()
+                text.split(',')
+                    .next()
+                    .filter(|s| s.starts_with("MATLAB"))
+                    .map(|s| format!(": {s}"))
+                    .unwrap_or_default()
             );
             (level5(&mut cx, b)?, fmt)
         }
@@ -457,7 +510,9 @@ fn tabulate(cx: &mut Ctx, vars: Vec<(String, Value)>) -> Result<(ChannelTable, S
         }
     }
     let known = |vs: &Vec<(String, Value)>| {
-        vs.iter().filter(|(n, v)| role_of(n).is_some() && matches!(v, Value::Numeric { dims, .. } if is_vector(dims))).count()
+        vs.iter()
+            .filter(|(n, v)| role_of(n).is_some() && matches!(v, Value::Numeric { dims, .. } if is_vector(dims)))
+            .count()
     };
     let best = (0..layouts.len()).max_by_key(|&i| (known(&layouts[i].1), usize::MAX - i)).unwrap_or(0);
     if known(&layouts[best].1) == 0 {
@@ -468,7 +523,11 @@ fn tabulate(cx: &mut Ctx, vars: Vec<(String, Value)>) -> Result<(ChannelTable, S
     }
     for (i, (lname, vs)) in layouts.iter().enumerate() {
         if i != best && known(vs) > 0 {
-            cx.warn.push("layout", Place::file(&file), format!("{lname} also holds channels: not used (read {})", layouts[best].0));
+            cx.warn.push(
+                "layout",
+                Place::file(&file),
+                format!("{lname} also holds channels: not used (read {})", layouts[best].0),
+            );
         }
     }
     let (layout, vs) = layouts.swap_remove(best);
@@ -496,7 +555,11 @@ fn tabulate(cx: &mut Ctx, vars: Vec<(String, Value)>) -> Result<(ChannelTable, S
                 table.columns.push(Column { name, unit: String::new(), values });
             }
             Value::Numeric { dims, .. } => {
-                let what = if is_vector(&dims) { format!("a vector of {} values, not {rows}", dims.iter().product::<usize>()) } else { format!("a {} matrix", dims_text(&dims)) };
+                let what = if is_vector(&dims) {
+                    format!("a vector of {} values, not {rows}", dims.iter().product::<usize>())
+                } else {
+                    format!("a {} matrix", dims_text(&dims))
+                };
                 cx.warn.push("skipped variable", place, format!("{what}: not used as a channel"));
             }
             Value::Char { .. } if ["tireid", "tyreid", "testid"].iter().any(|k| name.eq_ignore_ascii_case(k)) => {}

@@ -50,7 +50,13 @@ pub struct MatWriteOptions {
 
 impl Default for MatWriteOptions {
     fn default() -> Self {
-        Self { compress: true, big_endian: false, layout: MatLayout::Variables, narrow_integers: true, chars: CharEncoding::Utf16 }
+        Self {
+            compress: true,
+            big_endian: false,
+            layout: MatLayout::Variables,
+            narrow_integers: true,
+            chars: CharEncoding::Utf16,
+        }
     }
 }
 
@@ -223,9 +229,9 @@ pub fn to_mat(table: &ChannelTable, opt: &MatWriteOptions) -> Result<Vec<u8>, Re
         let values = match role_of(&c.name) {
             Some(role) if !c.unit.trim().is_empty() && c.unit.trim() != role.ttc_unit() => {
                 let place = Place::file(&table.source).channel(&c.name);
-                let from = units::parse(&c.unit)
-                    .filter(|u| u.quantity == role.quantity())
-                    .ok_or_else(|| ReadError::at(place.clone(), format!("unit `{}` is not a {} unit", c.unit, role.quantity().name())))?;
+                let from = units::parse(&c.unit).filter(|u| u.quantity == role.quantity()).ok_or_else(|| {
+                    ReadError::at(place.clone(), format!("unit `{}` is not a {} unit", c.unit, role.quantity().name()))
+                })?;
                 let to = units::parse(role.ttc_unit()).ok_or_else(|| ReadError::at(place, "no TTC unit"))?;
                 c.values.iter().map(|&v| to.from_target(from.to_target(v))).collect()
             }
@@ -233,7 +239,8 @@ pub fn to_mat(table: &ChannelTable, opt: &MatWriteOptions) -> Result<Vec<u8>, Re
         };
         cols.push((c.name.clone(), values));
     }
-    let mut o = Out { be: opt.big_endian, b: Vec::with_capacity(128 + cols.iter().map(|c| c.1.len() * 8 + 64).sum::<usize>()) };
+    let mut o =
+        Out { be: opt.big_endian, b: Vec::with_capacity(128 + cols.iter().map(|c| c.1.len() * 8 + 64).sum::<usize>()) };
     let mut text = format!("MATLAB 5.0 MAT-file, Platform: tyrerig, Created by: rigdata ({})", table.source);
     text.truncate(116);
     while text.len() < 116 {
