@@ -13,7 +13,6 @@
 //! * [`metrics`], [`report`]: per-stage/per-channel RMSE, NRMSE, bias, max error, R² grouped by
 //!   load, pressure and camber; Markdown, `fit.json` and PNG/SVG plots.
 //! * [`accuracy`]: fitted-versus-reference model comparison on a held-out grid.
-//! * [`tydex`]: TYDEX `.tdx` export/import and Calspan TTC-style import (SAE → ISO-W).
 //! * [`synth`]: synthetic GS2MF-like data from a known tyre (tests, demos).
 //!
 //! ```no_run
@@ -36,7 +35,6 @@ pub mod report;
 pub mod stages;
 pub mod starts;
 pub mod synth;
-pub mod tydex;
 
 pub use data::{Cell, DataKind, Dataset, Origin, Procedure, Sample, Segment, SweepKind, ValidRange};
 pub use error::FitError;

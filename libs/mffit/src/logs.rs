@@ -8,7 +8,9 @@
 //! `WarmUp`, `GraphSweep`, else a force & moment sweep).
 //!
 //! Writing: a dataset (e.g. imported from TYDEX or TTC files) becomes a log the fitter reads the
-//! same way, with one `ProcedureState` per segment.
+//! same way, with one `ProcedureState` per segment. What a `ProcedureState` cannot carry — the
+//! kind, [`Cell`] and [`Origin`] of segments found in measured files — goes into a `segments`
+//! metadata record (segment index → JSON) and comes back on reading.
 
 use std::collections::BTreeMap;
 use std::path::Path;
@@ -17,12 +19,23 @@ use mcaplog::{LogReader, McapLog, McapLogOptions};
 use tyre_msgs::std_msgs::Header;
 use tyre_msgs::{ProcedureState, RigSample, RigSetpoint, RosMessage};
 
-use crate::data::{DataKind, Dataset, Procedure, Sample, Segment};
+use crate::data::{Cell, DataKind, Dataset, Origin, Procedure, Sample, Segment};
 use crate::error::FitError;
 
 fn log_err(path: &Path, message: impl ToString) -> FitError {
     FitError::Log { path: path.to_owned(), message: message.to_string() }
 }
+
+/// What the `segments` metadata record keeps of a segment found in a measured file.
+#[derive(serde::Serialize, serde::Deserialize)]
+struct SegmentMeta {
+    kind: DataKind,
+    cell: Option<Cell>,
+    origin: Option<Origin>,
+}
+
+/// Metadata record name for [`SegmentMeta`] by segment index.
+const SEGMENTS_RECORD: &str = "segments";
 
 fn topic_of<M: RosMessage>(reader: &LogReader) -> Option<String> {
     let want = M::ros_type_name();
@@ -88,6 +101,7 @@ pub fn read_log(path: &Path) -> Result<Dataset, FitError> {
         .or_else(|| md.get("tyre").and_then(|t| t.get("fnomin_n")))
         .and_then(|v| v.parse::<f64>().ok());
     let md_procedure = md.get("procedure").and_then(|p| p.get("name")).and_then(|n| Procedure::from_name(n));
+    let seg_meta = md.get(SEGMENTS_RECORD);
 
     let mut segments: Vec<Segment> = Vec::new();
     let mut si = 0usize;
@@ -118,14 +132,20 @@ pub fn read_log(path: &Path) -> Result<Dataset, FitError> {
                     RigSetpoint::MODE_STATIC => Procedure::StaticLong,
                     _ => Procedure::FreeRolling,
                 });
+                let meta: Option<SegmentMeta> = seg_meta
+                    .and_then(|m| m.get(&st.sweep_index.to_string()))
+                    .and_then(|j| serde_json::from_str(j).ok());
                 open = Some(Segment {
                     procedure,
-                    kind: DataKind::from_names(&st.section, &st.sweep_name),
+                    kind: meta
+                        .as_ref()
+                        .map(|m| m.kind)
+                        .unwrap_or_else(|| DataKind::from_names(&st.section, &st.sweep_name)),
                     section: st.section.clone(),
                     sweep: st.sweep_name.clone(),
                     samples: Vec::new(),
-                    cell: None,
-                    origin: None,
+                    cell: meta.as_ref().and_then(|m| m.cell),
+                    origin: meta.and_then(|m| m.origin),
                 });
             }
         }
@@ -202,6 +222,19 @@ pub fn write_log(path: &Path, data: &Dataset) -> Result<(), FitError> {
         let mut p = BTreeMap::new();
         p.insert("fz0_n".to_owned(), format!("{f}"));
         log.write_metadata("procedure", &p).map_err(werr)?;
+    }
+    let seg_meta: BTreeMap<String, String> = data
+        .segments
+        .iter()
+        .enumerate()
+        .filter(|(_, s)| s.cell.is_some() || s.origin.is_some())
+        .filter_map(|(i, s)| {
+            let m = SegmentMeta { kind: s.kind, cell: s.cell, origin: s.origin.clone() };
+            serde_json::to_string(&m).ok().map(|j| (i.to_string(), j))
+        })
+        .collect();
+    if !seg_meta.is_empty() {
+        log.write_metadata(SEGMENTS_RECORD, &seg_meta).map_err(werr)?;
     }
     let schema = |t: &str| tyre_msgs::schema::ros2msg_schema_for(t).map_err(|e| log_err(path, e));
     let st_type = ProcedureState::ros_type_name();

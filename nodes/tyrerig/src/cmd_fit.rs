@@ -10,8 +10,8 @@ use mftyre::TyreParams;
 /// Arguments of `tyrerig fit`.
 #[derive(Debug, Args)]
 pub struct FitArgs {
-    /// Logs to fit: MCAP logs of the FreeRolling, BrkDrv and StaticLong procedures (TYDEX `.tdx`
-    /// files are accepted too)
+    /// Data to fit: MCAP logs of the FreeRolling, BrkDrv and StaticLong procedures, or measured
+    /// files (TTC `.dat`/`.mat`, TYDEX `.tdx`) and folders of them
     #[arg(required = true)]
     pub logs: Vec<PathBuf>,
     /// The fitted tyre property file (FITTYP 61)
@@ -59,11 +59,23 @@ pub struct FitArgs {
 pub const EXIT_NONPHYSICAL: i32 = 3;
 
 fn read_any(path: &Path) -> Result<mffit::Dataset> {
-    let ext = path.extension().map(|e| e.to_string_lossy().to_ascii_lowercase()).unwrap_or_default();
-    Ok(match ext.as_str() {
-        "tdx" | "tydex" => mffit::tydex::read_tydex(path)?,
-        _ => mffit::logs::read_log(path)?,
-    })
+    let measured = path.is_dir() || rigdata::import::FileFormat::of(path).is_some();
+    if !measured {
+        return Ok(mffit::logs::read_log(path)?);
+    }
+    let import = rigdata::read_path(path, &rigdata::ReadOptions::default())?;
+    for f in &import.inspection.files {
+        let conditioning = f.conditioning_sweeps;
+        eprintln!(
+            "{}: {} sweeps ({} conditioning, not fitted), {} rows excluded, {} warnings (`tyrerig inspect` lists them)",
+            f.file,
+            f.sweeps.len() - conditioning,
+            conditioning,
+            f.excluded.iter().map(|e| e.1).sum::<usize>(),
+            f.warnings.len()
+        );
+    }
+    Ok(import.dataset)
 }
 
 /// Runs the fit.

@@ -37,14 +37,16 @@ enum Command {
     Report(Box<cmd_report::ReportArgs>),
     /// Find where model and logs disagree, name the missing effect, add it, show the gap shrink
     Doctor(Box<cmd_doctor::DoctorArgs>),
-    /// Fit an MF-Tyre 6.1 model (.tir) to GS2MF logs, staged as in the thesis
+    /// Fit an MF-Tyre 6.1 model (.tir) to GS2MF logs or measured files, staged as in the thesis
     Fit(Box<cmd_fit::FitArgs>),
-    /// Export log data (TYDEX)
+    /// Export log data (TYDEX) or a measured file's channels (MATLAB .mat)
     #[command(subcommand)]
     Export(cmd_data::ExportCmd),
-    /// Import legacy rig data (Calspan TTC-style, TYDEX) into an MCAP log the fitter reads
+    /// Import measured rig data (Calspan TTC .dat/.mat, TYDEX .tdx, folders) into an MCAP log the fitter reads
     #[command(subcommand)]
     Import(cmd_data::ImportCmd),
+    /// Show what a measured file holds: tyre, test, channels and units, sweeps per cell, excluded rows, warnings
+    Inspect(cmd_data::InspectArgs),
     /// Run a procedure on the virtual rig, log it to MCAP and print the rig-time summary
     Run(Box<cmd_run::RunArgs>),
     /// Virtual rig: calibration against the thesis
@@ -75,6 +77,7 @@ fn main() -> anyhow::Result<()> {
         Command::Fit(args) => cmd_fit::run(*args),
         Command::Export(cmd) => cmd_data::run_export(cmd),
         Command::Import(cmd) => cmd_data::run_import(cmd),
+        Command::Inspect(args) => cmd_data::run_inspect(args),
         Command::Run(args) => cmd_run::run(*args),
         Command::Rig(cmd) => cmd_rig::run(cmd),
         Command::Model(cmd) => cmd_model::run(cmd),

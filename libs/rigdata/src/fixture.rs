@@ -1,0 +1,347 @@
+//! Synthetic TTC-like runs for tests and benchmarks: what a Calspan run file looks like around
+//! its sweeps — standstill at both ends (where `SR` reads about −0.9), load and pressure ramps
+//! between cells, the wheel lifted at the end, conditioning sweeps to a few degrees, repeated sweeps, `SR` ≠ `SL` (offset and
+//! noisy while `SL` is exactly 0 in cornering), SAE signs, 50 Hz, an ambient temperature in °F
+//! labelled °C — with the list of sweeps it holds, so a test can check that a reader finds them.
+//!
+//! The forces are a simple Magic-Formula-like curve with friction ellipse; they only need signs
+//! and magnitudes like a race tyre's (the physical virtual tyre lives in `rigsim`).
+
+use mffit::SweepKind;
+
+use crate::table::ChannelTable;
+
+/// A sweep the fixture holds.
+#[derive(Debug, Clone, PartialEq)]
+pub struct PlannedSweep {
+    /// Kind.
+    pub kind: SweepKind,
+    /// A conditioning sweep.
+    pub conditioning: bool,
+    /// Load, N.
+    pub fz_n: f64,
+    /// Pressure, kPa.
+    pub p_kpa: f64,
+    /// Camber, deg.
+    pub ia_deg: f64,
+    /// Held slip angle (ISO-W), deg.
+    pub sa_deg: f64,
+}
+
+/// A synthetic run and its sweeps.
+#[derive(Debug, Clone)]
+pub struct FixtureRun {
+    /// The file's channels (TTC names and units, SAE signs).
+    pub table: ChannelTable,
+    /// The sweeps in order.
+    pub sweeps: Vec<PlannedSweep>,
+}
+
+/// What kind of run to make.
+#[derive(Debug, Clone, PartialEq)]
+pub struct FixtureSpec {
+    /// Cornering (slip-angle sweeps) or drive/brake/combined (slip-ratio sweeps).
+    pub cornering: bool,
+    /// Sample rate, Hz.
+    pub rate_hz: f64,
+    /// Pressures, kPa.
+    pub pressures_kpa: Vec<f64>,
+    /// Loads, N; the first is also where the conditioning sweep runs and is repeated at the end
+    /// of each pressure, as TTC runs do.
+    pub loads_n: Vec<f64>,
+    /// Cambers, deg.
+    pub cambers_deg: Vec<f64>,
+    /// Held slip angles for slip-ratio sweeps (ISO-W), deg.
+    pub slip_angles_deg: Vec<f64>,
+    /// Sweep duration, s.
+    pub sweep_s: f64,
+    /// Include `SL` (else only `SR`, as some files).
+    pub with_sl: bool,
+    /// Noise seed.
+    pub seed: u64,
+}
+
+impl FixtureSpec {
+    /// A small cornering run: two pressures, three loads plus a repeat, camber 0.
+    pub fn cornering() -> Self {
+        Self {
+            cornering: true,
+            rate_hz: 50.0,
+            pressures_kpa: vec![83.0, 97.0],
+            loads_n: vec![1100.0, 660.0, 1540.0],
+            cambers_deg: vec![0.0],
+            slip_angles_deg: vec![0.0],
+            sweep_s: 12.0,
+            with_sl: true,
+            seed: 1,
+        }
+    }
+
+    /// A small drive/brake/combined run: one pressure, two loads, cambers 0 and 2°, slip
+    /// angles 0 and 3°.
+    pub fn drive_brake() -> Self {
+        Self {
+            cornering: false,
+            rate_hz: 50.0,
+            pressures_kpa: vec![83.0],
+            loads_n: vec![1100.0, 660.0],
+            cambers_deg: vec![0.0, 2.0],
+            slip_angles_deg: vec![0.0, 3.0],
+            sweep_s: 5.0,
+            with_sl: true,
+            seed: 2,
+        }
+    }
+}
+
+/// Deterministic noise (xorshift64* with Box–Muller), so fixtures need no random crate.
+struct Noise(u64);
+
+impl Noise {
+    fn uniform(&mut self) -> f64 {
+        self.0 ^= self.0 >> 12;
+        self.0 ^= self.0 << 25;
+        self.0 ^= self.0 >> 27;
+        ((self.0.wrapping_mul(0x2545_F491_4F6C_DD1D) >> 11) as f64 + 0.5) / (1u64 << 53) as f64
+    }
+
+    fn normal(&mut self, sd: f64) -> f64 {
+        let (a, b) = (self.uniform(), self.uniform());
+        sd * (-2.0 * a.ln()).sqrt() * (std::f64::consts::TAU * b).cos()
+    }
+}
+
+#[derive(Debug, Clone, Copy)]
+struct State {
+    v_kph: f64,
+    fz_n: f64,
+    p_kpa: f64,
+    ia_deg: f64,
+    sa_deg: f64,
+    sl: f64,
+}
+
+struct Builder {
+    dt: f64,
+    t: f64,
+    s: State,
+    rows: Vec<(f64, State)>,
+}
+
+impl Builder {
+    fn steps(&self, dur: f64) -> usize {
+        (dur / self.dt).round().max(1.0) as usize
+    }
+
+    fn hold(&mut self, dur: f64) {
+        for _ in 0..self.steps(dur) {
+            self.t += self.dt;
+            self.rows.push((self.t, self.s));
+        }
+    }
+
+    fn ramp(&mut self, dur: f64, to: State) {
+        let from = self.s;
+        let n = self.steps(dur);
+        for k in 1..=n {
+            let f = k as f64 / n as f64;
+            let l = |a: f64, b: f64| a + (b - a) * f;
+            self.s = State {
+                v_kph: l(from.v_kph, to.v_kph),
+                fz_n: l(from.fz_n, to.fz_n),
+                p_kpa: l(from.p_kpa, to.p_kpa),
+                ia_deg: l(from.ia_deg, to.ia_deg),
+                sa_deg: l(from.sa_deg, to.sa_deg),
+                sl: l(from.sl, to.sl),
+            };
+            self.t += self.dt;
+            self.rows.push((self.t, self.s));
+        }
+    }
+
+    /// 0 → −amp → +amp → 0 (triangle) on the slip angle or the slip ratio.
+    fn sweep(&mut self, dur: f64, amp: f64, on_sa: bool) {
+        let n = self.steps(dur);
+        let base = self.s;
+        for k in 1..=n {
+            let f = k as f64 / n as f64;
+            let x = if f < 0.25 {
+                -4.0 * f
+            } else if f < 0.75 {
+                -1.0 + 4.0 * (f - 0.25)
+            } else {
+                1.0 - 4.0 * (f - 0.75)
+            };
+            let mut s = base;
+            if on_sa {
+                s.sa_deg = amp * x;
+            } else {
+                s.sl = amp * x;
+            }
+            self.s = s;
+            self.t += self.dt;
+            self.rows.push((self.t, s));
+        }
+        self.s = base;
+    }
+}
+
+/// Makes a synthetic run.
+pub fn ttc_run(spec: &FixtureSpec) -> FixtureRun {
+    let mut b = Builder {
+        dt: 1.0 / spec.rate_hz,
+        t: -1.0 / spec.rate_hz,
+        s: State { v_kph: 0.0, fz_n: 0.0, p_kpa: spec.pressures_kpa[0], ia_deg: 0.0, sa_deg: 0.0, sl: 0.0 },
+        rows: Vec::new(),
+    };
+    let mut sweeps = Vec::new();
+    // Standstill: loaded at zero speed, then up to speed.
+    b.hold(1.0);
+    b.ramp(1.0, State { fz_n: 220.0, ..b.s });
+    b.hold(3.0);
+    b.ramp(3.0, State { v_kph: 40.0, ..b.s });
+    let plan = |b: &mut Builder, sweeps: &mut Vec<PlannedSweep>, to: State, conditioning: bool, amp: f64| {
+        b.ramp(2.0, to);
+        b.hold(1.5);
+        b.sweep(if conditioning { spec.sweep_s * 0.5 } else { spec.sweep_s }, amp, spec.cornering);
+        b.hold(1.0);
+        let kind = if spec.cornering {
+            SweepKind::Cornering
+        } else if to.sa_deg.abs() < 1.0 {
+            SweepKind::DriveBrake
+        } else {
+            SweepKind::Combined
+        };
+        // ISO-W slip angle held: the file's SAE angle flips.
+        sweeps.push(PlannedSweep {
+            kind,
+            conditioning,
+            fz_n: to.fz_n,
+            p_kpa: to.p_kpa,
+            ia_deg: to.ia_deg,
+            sa_deg: -to.sa_deg,
+        });
+    };
+    for &p in &spec.pressures_kpa {
+        // Pressure set at light load.
+        b.ramp(2.0, State { fz_n: 220.0, sa_deg: 0.0, sl: 0.0, ..b.s });
+        b.ramp(4.0, State { p_kpa: p, ..b.s });
+        b.hold(1.0);
+        let first = State { fz_n: spec.loads_n[0], ia_deg: spec.cambers_deg[0], sa_deg: 0.0, ..b.s };
+        let cond_amp = if spec.cornering { 3.0 } else { 0.04 };
+        // The conditioning sweeps: two short ones back to back.
+        plan(&mut b, &mut sweeps, first, true, cond_amp);
+        b.sweep(spec.sweep_s * 0.5, cond_amp, spec.cornering);
+        b.hold(1.0);
+        let amp = if spec.cornering { 12.0 } else { 0.2 };
+        for &ia in &spec.cambers_deg {
+            for &sa in &spec.slip_angles_deg {
+                for &fz in &spec.loads_n {
+                    let to = State { fz_n: fz, ia_deg: ia, sa_deg: -sa, ..b.s };
+                    plan(&mut b, &mut sweeps, to, false, amp);
+                }
+            }
+        }
+        // A repeat at the first load, as TTC runs end each pressure.
+        let to = State { fz_n: spec.loads_n[0], ia_deg: spec.cambers_deg[0], sa_deg: 0.0, ..b.s };
+        plan(&mut b, &mut sweeps, to, false, amp);
+    }
+    // Unloaded at speed (wheel lifted), then the belt stops.
+    b.ramp(2.0, State { fz_n: 0.0, sa_deg: 0.0, sl: 0.0, ia_deg: 0.0, ..b.s });
+    b.hold(2.0);
+    b.ramp(3.0, State { v_kph: 0.0, ..b.s });
+    b.hold(2.0);
+    FixtureRun { table: tabulate(spec, &b.rows), sweeps }
+}
+
+fn tabulate(spec: &FixtureSpec, rows: &[(f64, State)]) -> ChannelTable {
+    let mut nz = Noise(spec.seed.wrapping_mul(0x9E37_79B9_7F4A_7C15) | 1);
+    let n = rows.len();
+    let mut c: Vec<Vec<f64>> = vec![Vec::with_capacity(n); 23];
+    let t_end = rows.last().map(|r| r.0).unwrap_or(1.0).max(1.0);
+    for (t, s) in rows {
+        let fz = s.fz_n + nz.normal(8.0);
+        let alpha = (-s.sa_deg).to_radians(); // ISO-W
+        let gamma = s.ia_deg.to_radians();
+        let kappa = s.sl;
+        // Friction falls with load (race tyre, μ ≈ 2.5 at light load).
+        let mu = 2.6 - 0.3 * (fz / 1500.0);
+        let (bx, by) = (12.0, 9.0);
+        let sx = (bx * kappa).atan() * 1.6;
+        let sy = (by * alpha).atan() * 1.4;
+        let fx0 = mu * fz * sx.sin();
+        let fy0 = -mu * fz * sy.sin() + 0.8 * fz * gamma;
+        // Combined: each force reduced by the other's share of friction.
+        let gx = (1.0 / (1.0 + (4.0 * alpha).powi(2))).sqrt();
+        let gy = (1.0 / (1.0 + (6.0 * kappa).powi(2))).sqrt();
+        let (fx, fy) = (fx0 * gx, fy0 * gy);
+        let mz = -0.02 * fy * (1.0 - (alpha.abs() / 0.2).min(1.0)) + 0.01 * fx * alpha.signum() * 0.1;
+        let mx = -0.005 * fy + 0.02 * fz * gamma;
+        let rl = 0.258 - fz / 150_000.0;
+        let re = 0.255 - fz / 300_000.0;
+        let v = s.v_kph + if s.v_kph > 0.0 { nz.normal(0.05) } else { 0.0 };
+        let omega = v / 3.6 / re * (1.0 + kappa);
+        let rolling = s.v_kph > 1.0;
+        let sr = if rolling { kappa - 0.01 + nz.normal(0.006) } else { -0.9 + nz.normal(0.01) };
+        let temp = 45.0 + 11.0 * t / t_end + if spec.cornering { 0.0 } else { 40.0 * t / t_end - 7.0 };
+        // SAE as written: FY, FZ, SA, MZ flip.
+        let vals = [
+            *t,
+            v,
+            omega * 30.0 / std::f64::consts::PI,
+            s.sa_deg + nz.normal(0.02),
+            s.ia_deg + nz.normal(0.01),
+            rl * 100.0,
+            if rolling { re * 100.0 } else { 100.0 + nz.normal(40.0) },
+            s.p_kpa + nz.normal(0.3),
+            fx + nz.normal(10.0),
+            -fy + nz.normal(10.0),
+            -fz,
+            mx + nz.normal(0.5),
+            -mz + nz.normal(0.3),
+            if fz.abs() > 1.0 { fx / fz } else { 0.0 },
+            if fz.abs() > 1.0 { -fy / -fz } else { 0.0 },
+            28.0 + nz.normal(0.1),
+            temp + 2.0 + nz.normal(0.3),
+            temp + nz.normal(0.3),
+            temp - 2.0 + nz.normal(0.3),
+            86.5 + nz.normal(0.2),
+            sr,
+            if spec.cornering { 0.0 } else { kappa + nz.normal(0.0008) },
+            0.0,
+        ];
+        for (k, v) in vals.iter().enumerate() {
+            c[k].push(*v);
+        }
+    }
+    let names = [
+        "ET", "V", "N", "SA", "IA", "RL", "RE", "P", "FX", "FY", "FZ", "MX", "MZ", "NFX", "NFY", "RST", "TSTI", "TSTC",
+        "TSTO", "AMBTMP", "SR", "SL",
+    ];
+    let units = [
+        "s", "kph", "rpm", "deg", "deg", "cm", "cm", "kPa", "N", "N", "N", "N-m", "N-m", "none", "none", "degC",
+        "degC", "degC", "degC", "degC", "none", "none",
+    ];
+    let mut t = ChannelTable {
+        source: "fixture".into(),
+        title: Some(format!(
+            "TIRF Data File: Project 0000; Run {:03}; synthetic {}; Tire_Name=Fixture 20.5x7.0-13, R25B; Rim_Width=7.0",
+            spec.seed,
+            if spec.cornering { "cornering" } else { "drive/brake/combined" }
+        )),
+        tire_id: Some("Fixture 20.5x7.0-13, R25B".into()),
+        test_id: Some(if spec.cornering {
+            "Cornering, Various pressures".into()
+        } else {
+            "Drive/Brake/Combined, 12psi".into()
+        }),
+        columns: Vec::new(),
+    };
+    for (k, (name, unit)) in names.iter().zip(units).enumerate() {
+        if *name == "SL" && !spec.with_sl {
+            continue;
+        }
+        t.push(name, unit, std::mem::take(&mut c[k]));
+    }
+    t
+}

@@ -1,0 +1,227 @@
+//! What a reading found, for a person to check before fitting (`tyrerig inspect`,
+//! `tyrerig import … --dry-run`) or for a machine (`--json`).
+
+use std::fmt::Write as _;
+
+use serde::Serialize;
+
+use crate::error::Warning;
+use crate::interpret::ChannelUse;
+
+/// One sweep found.
+#[derive(Debug, Clone, PartialEq, Default, Serialize)]
+pub struct SweepRow {
+    /// Segment name (`cornering P83kPa FZ1100N IA0 #2`).
+    pub name: String,
+    /// `cornering`, `drive/brake`, `combined`.
+    pub kind: String,
+    /// A conditioning (warm-up) sweep, not fitted.
+    pub conditioning: bool,
+    /// First line (text files) or row (1-based, `.mat`).
+    pub first_row: usize,
+    /// Last line or row.
+    pub last_row: usize,
+    /// Rows.
+    pub rows: usize,
+    /// Median load, N (ISO-W, positive).
+    pub fz_n: f64,
+    /// Median pressure, kPa.
+    pub p_kpa: f64,
+    /// Median camber, deg.
+    pub ia_deg: f64,
+    /// Held slip angle, deg (slip-ratio sweeps).
+    pub sa_deg: f64,
+    /// Median road speed, kph.
+    pub v_kph: f64,
+    /// Largest |slip| reached: deg for cornering, slip ratio otherwise.
+    pub reach: f64,
+}
+
+/// One test cell: the sweeps (not counting conditioning ones) run at it.
+#[derive(Debug, Clone, PartialEq, Default, Serialize)]
+pub struct CellRow {
+    /// Cell name.
+    pub label: String,
+    /// Kind.
+    pub kind: String,
+    /// Pressure, kPa.
+    pub p_kpa: f64,
+    /// Load, N.
+    pub fz_n: f64,
+    /// Camber, deg.
+    pub ia_deg: f64,
+    /// Held slip angle, deg.
+    pub sa_deg: f64,
+    /// Speed, kph.
+    pub v_kph: f64,
+    /// Sweeps.
+    pub sweeps: usize,
+}
+
+/// What was found in one file.
+#[derive(Debug, Clone, PartialEq, Default, Serialize)]
+pub struct FileReport {
+    /// File.
+    pub file: String,
+    /// Format.
+    pub format: String,
+    /// `.mat` layout.
+    pub layout: Option<String>,
+    /// Title line.
+    pub title: Option<String>,
+    /// Tyre.
+    pub tire_id: Option<String>,
+    /// Test id as written.
+    pub test_id: Option<String>,
+    /// Test kind the file states.
+    pub test_kind_stated: Option<String>,
+    /// Test kind found in the data (`cornering`, `drive/brake/combined`, `mixed`, `none`).
+    pub test_kind_found: String,
+    /// Sign convention read in.
+    pub convention: String,
+    /// How it was decided.
+    pub convention_basis: String,
+    /// Slip-ratio channel.
+    pub slip_ratio_from: String,
+    /// Rows in the file.
+    pub rows: usize,
+    /// Sample rate, Hz.
+    pub sample_rate_hz: f64,
+    /// Channels.
+    pub channels: Vec<ChannelUse>,
+    /// Cells (conditioning sweeps not counted).
+    pub cells: Vec<CellRow>,
+    /// Sweeps, conditioning ones included.
+    pub sweeps: Vec<SweepRow>,
+    /// Conditioning sweeps.
+    pub conditioning_sweeps: usize,
+    /// Rows in (fitted) sweeps.
+    pub rows_in_sweeps: usize,
+    /// Rows in conditioning sweeps.
+    pub rows_in_conditioning: usize,
+    /// Rows excluded per reason.
+    pub excluded: Vec<(String, usize)>,
+    /// Warnings.
+    pub warnings: Vec<Warning>,
+}
+
+/// The reading of one or several files.
+#[derive(Debug, Clone, PartialEq, Default, Serialize)]
+pub struct Inspection {
+    /// Per file.
+    pub files: Vec<FileReport>,
+}
+
+impl Inspection {
+    /// Sweeps found (conditioning ones not counted), per kind, over all files.
+    pub fn sweep_counts(&self) -> (usize, usize, usize) {
+        let mut c = (0, 0, 0);
+        for s in self.files.iter().flat_map(|f| &f.sweeps).filter(|s| !s.conditioning) {
+            match s.kind.as_str() {
+                "cornering" => c.0 += 1,
+                "drive/brake" => c.1 += 1,
+                "combined" => c.2 += 1,
+                _ => {}
+            }
+        }
+        c
+    }
+
+    /// The report as text.
+    pub fn to_text(&self, verbose: bool) -> String {
+        let mut s = String::new();
+        for f in &self.files {
+            f.write_text(&mut s, verbose);
+        }
+        if self.files.len() > 1 {
+            let (c, d, k) = self.sweep_counts();
+            let _ = writeln!(s, "\n{} files: {c} cornering, {d} drive/brake, {k} combined sweeps", self.files.len());
+        }
+        s
+    }
+}
+
+impl FileReport {
+    fn write_text(&self, s: &mut String, verbose: bool) {
+        let _ = writeln!(s, "== {}", self.file);
+        let opt = |o: &Option<String>| o.clone().unwrap_or_else(|| "-".into());
+        let _ = writeln!(
+            s,
+            "format      {}{}",
+            self.format,
+            self.layout.as_ref().map(|l| format!(", channels as {l}")).unwrap_or_default()
+        );
+        if let Some(t) = &self.title {
+            let _ = writeln!(s, "title       {t}");
+        }
+        let _ = writeln!(s, "tyre        {}", opt(&self.tire_id));
+        let _ = writeln!(
+            s,
+            "test        stated: {} ({}); found in the data: {}",
+            opt(&self.test_id),
+            opt(&self.test_kind_stated),
+            self.test_kind_found
+        );
+        let _ = writeln!(s, "axes        {} ({}), converted to ISO-W", self.convention, self.convention_basis);
+        let _ = writeln!(s, "slip ratio  {}", self.slip_ratio_from);
+        let _ = writeln!(s, "rows        {} at {:.1} Hz", self.rows, self.sample_rate_hz);
+        if !self.channels.is_empty() {
+            let _ = writeln!(s, "\nchannels    {:<10} {:<10} {:<10} becomes", "name", "unit", "read as");
+            for c in &self.channels {
+                let unit = if c.unit_written.is_empty() { "(none)" } else { c.unit_written.as_str() };
+                let _ = writeln!(s, "            {:<10} {:<10} {:<10} {}", c.name, unit, c.unit_read, c.used_as);
+            }
+        }
+        if !self.cells.is_empty() {
+            let _ = writeln!(
+                s,
+                "\nsweeps per cell ({} sweeps, {} conditioning)",
+                self.sweeps.len() - self.conditioning_sweeps,
+                self.conditioning_sweeps
+            );
+            let _ = writeln!(
+                s,
+                "  {:<12} {:>7} {:>7} {:>6} {:>6} {:>6} {:>6}",
+                "kind", "P kPa", "FZ N", "IA deg", "SA deg", "V kph", "sweeps"
+            );
+            for c in &self.cells {
+                // Rounded first so a -0.01° camber prints as 0.0, not -0.0.
+                let r1 = |x: f64| (x * 10.0).round() / 10.0 + 0.0;
+                let _ = writeln!(
+                    s,
+                    "  {:<12} {:>7.1} {:>7.0} {:>6.1} {:>6.1} {:>6.1} {:>6}",
+                    c.kind,
+                    r1(c.p_kpa),
+                    c.fz_n,
+                    r1(c.ia_deg),
+                    r1(c.sa_deg),
+                    r1(c.v_kph),
+                    c.sweeps
+                );
+            }
+        }
+        if verbose && !self.sweeps.is_empty() {
+            let _ = writeln!(s, "\nsweeps");
+            for w in &self.sweeps {
+                let _ = writeln!(s, "  {:<48} rows {:>6}–{:<6} reach {:.3}", w.name, w.first_row, w.last_row, w.reach);
+            }
+        }
+        let _ = writeln!(
+            s,
+            "\nrows        {} in sweeps, {} in conditioning sweeps, {} excluded",
+            self.rows_in_sweeps,
+            self.rows_in_conditioning,
+            self.excluded.iter().map(|e| e.1).sum::<usize>()
+        );
+        for (why, n) in &self.excluded {
+            let _ = writeln!(s, "  {n:>8}  {why}");
+        }
+        if !self.warnings.is_empty() {
+            let _ = writeln!(s, "\nwarnings");
+            for w in &self.warnings {
+                let _ = writeln!(s, "  {w}");
+            }
+        }
+        let _ = writeln!(s);
+    }
+}

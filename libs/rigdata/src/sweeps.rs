@@ -1,0 +1,590 @@
+//! Finding the sweeps in a measured run, the way an engineer reads the plot: drop what is not a
+//! test (standstill, unloaded, load and pressure ramps, camber and speed changes), then, within
+//! each stretch where load, pressure, camber and speed are held, follow the slip channel that
+//! actually moves — the slip angle where it sweeps, else the slip ratio — and cut a sweep each
+//! time it has gone out and come back to zero. Short sweeps to a few degrees are the rig's
+//! conditioning (warm-up) sweeps, kept apart so the fitter does not use them. Every row ends
+//! up either in a sweep or excluded with a reason, and the reasons are counted.
+
+use serde::Serialize;
+
+use mffit::{Cell, SweepKind};
+
+use crate::interpret::{KappaSource, Signals};
+
+/// Thresholds of the segmentation. The defaults suit TTC-like runs (50–100 Hz, sweeps of a few
+/// seconds or more to ±13° or ±0.2 slip ratio).
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+pub struct SweepOptions {
+    /// Below this road speed the rig is standing still, m/s.
+    pub standstill_mps: f64,
+    /// Rows below this fraction of the run's high load (98th percentile) are unloaded.
+    pub unloaded_fraction: f64,
+    /// Half width of the window over which a held quantity must stay put, s.
+    pub hold_window_s: f64,
+    /// Load held within max(this, `fz_tol_fraction` × load), N.
+    pub fz_tol_n: f64,
+    /// Relative load tolerance.
+    pub fz_tol_fraction: f64,
+    /// Pressure held within max(this, 3 % of the pressure), Pa.
+    pub p_tol_pa: f64,
+    /// Camber held within, rad.
+    pub gamma_tol_rad: f64,
+    /// Speed held within max(this, 5 % of the speed), m/s.
+    pub v_tol_mps: f64,
+    /// A slip angle moving more than this over the hold window is sweeping, deg.
+    pub sa_moving_deg: f64,
+    /// Slip angle counted as zero (sweeps start and end here), deg.
+    pub sa_zero_deg: f64,
+    /// A slip-angle excursion beyond this is a sweep, deg.
+    pub sa_on_deg: f64,
+    /// Slip ratio counted as zero (`SL`).
+    pub kappa_zero: f64,
+    /// A slip-ratio excursion beyond this is a sweep (`SL`).
+    pub kappa_on: f64,
+    /// The same two for `SR`, which is noisy and offset even when free rolling.
+    pub sr_zero: f64,
+    /// See `sr_zero`.
+    pub sr_on: f64,
+    /// Quiet this long after an excursion ends a sweep, s.
+    pub idle_split_s: f64,
+    /// Shortest sweep kept, s.
+    pub min_sweep_s: f64,
+    /// A sweep reaching less than this fraction of its kind's typical reach is a conditioning
+    /// (warm-up) sweep.
+    pub conditioning_fraction: f64,
+}
+
+impl Default for SweepOptions {
+    fn default() -> Self {
+        Self {
+            standstill_mps: 0.5,
+            unloaded_fraction: 0.05,
+            hold_window_s: 0.5,
+            fz_tol_n: 60.0,
+            fz_tol_fraction: 0.06,
+            p_tol_pa: 3_000.0,
+            gamma_tol_rad: 0.25_f64.to_radians(),
+            v_tol_mps: 0.3,
+            sa_moving_deg: 0.3,
+            sa_zero_deg: 0.5,
+            sa_on_deg: 1.0,
+            kappa_zero: 0.005,
+            kappa_on: 0.02,
+            sr_zero: 0.02,
+            sr_on: 0.05,
+            idle_split_s: 2.0,
+            min_sweep_s: 1.0,
+            conditioning_fraction: 0.5,
+        }
+    }
+}
+
+/// Why a row is not in any sweep.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Serialize, PartialOrd, Ord)]
+pub enum Exclusion {
+    /// A needed value is NaN or missing.
+    NonFinite,
+    /// Road speed about zero (start and end of a run).
+    Standstill,
+    /// Wheel off the road or barely loaded.
+    Unloaded,
+    /// Load changing between cells.
+    LoadRamp,
+    /// Pressure changing between cells.
+    PressureRamp,
+    /// Camber changing between cells.
+    CamberChange,
+    /// Speed changing.
+    SpeedChange,
+    /// Slip angle moving without forming a sweep (set between slip-ratio sweeps).
+    SlipAngleChange,
+    /// Rolling at a held cell with no slip sweep.
+    Idle,
+    /// A sweep cut off before it came back to zero.
+    IncompleteSweep,
+    /// A sweep shorter than the shortest kept.
+    ShortSweep,
+}
+
+impl Exclusion {
+    /// Reason in reports.
+    pub fn name(self) -> &'static str {
+        match self {
+            Exclusion::NonFinite => "NaN or missing value",
+            Exclusion::Standstill => "standstill (V ≈ 0)",
+            Exclusion::Unloaded => "unloaded",
+            Exclusion::LoadRamp => "load ramp",
+            Exclusion::PressureRamp => "pressure ramp",
+            Exclusion::CamberChange => "camber change",
+            Exclusion::SpeedChange => "speed change",
+            Exclusion::SlipAngleChange => "slip angle set between sweeps",
+            Exclusion::Idle => "rolling between sweeps",
+            Exclusion::IncompleteSweep => "incomplete sweep",
+            Exclusion::ShortSweep => "sweep too short",
+        }
+    }
+}
+
+/// One sweep found.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct FoundSweep {
+    /// Its cell and kind.
+    pub cell: Cell,
+    /// A conditioning (warm-up) sweep.
+    pub conditioning: bool,
+    /// First row (0-based index into the table).
+    pub first: usize,
+    /// Last row, inclusive.
+    pub last: usize,
+}
+
+/// The outcome of [`find_sweeps`].
+#[derive(Debug, Clone, Default)]
+pub struct Segmentation {
+    /// Sweeps in row order.
+    pub sweeps: Vec<FoundSweep>,
+    /// Rows excluded, per reason (reasons with no rows left out).
+    pub excluded: Vec<(Exclusion, usize)>,
+    /// Rows of cornering sweeps whose `SR` slip ratio was set to zero (free rolling).
+    pub sr_zeroed: usize,
+    /// Slip-ratio sweeps not looked for because `SR` is meaningless in a cornering test.
+    pub kappa_ignored: bool,
+}
+
+/// What a file says its test is (`testid`, title, TYDEX constants).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
+pub enum TestKind {
+    /// Cornering (free rolling, slip-angle sweeps).
+    Cornering,
+    /// Drive/brake and/or combined (slip-ratio sweeps).
+    DriveBrake,
+}
+
+impl TestKind {
+    /// Reads a test id (`Cornering, Various pressures`, `Drive/Brake/Combined, 12psi`).
+    pub fn from_id(id: &str) -> Option<Self> {
+        let l = id.to_ascii_lowercase();
+        if l.contains("drive") || l.contains("brake") || l.contains("combined") || l.contains("longitudinal") {
+            Some(TestKind::DriveBrake)
+        } else if l.contains("cornering") || l.contains("lateral") || l.contains("free rolling") {
+            Some(TestKind::Cornering)
+        } else {
+            None
+        }
+    }
+
+    /// Name in reports.
+    pub fn name(self) -> &'static str {
+        match self {
+            TestKind::Cornering => "cornering",
+            TestKind::DriveBrake => "drive/brake/combined",
+        }
+    }
+}
+
+fn median_of(it: impl Iterator<Item = f64>) -> f64 {
+    let mut v: Vec<f64> = it.filter(|x| x.is_finite()).collect();
+    if v.is_empty() {
+        return f64::NAN;
+    }
+    let mid = v.len() / 2;
+    let (_, m, _) = v.select_nth_unstable_by(mid, f64::total_cmp);
+    *m
+}
+
+/// Rows where `x` does not stay put: its moving average over ±`w` rows spans more than `tol`
+/// (of the local level) within ±`w` rows.
+fn unsteady(x: &[f64], w: usize, tol: impl Fn(f64) -> f64) -> Vec<bool> {
+    let n = x.len();
+    // Prefix sums over finite values for the moving average.
+    let mut sum = vec![0.0; n + 1];
+    let mut cnt = vec![0usize; n + 1];
+    for i in 0..n {
+        let ok = x[i].is_finite();
+        sum[i + 1] = sum[i] + if ok { x[i] } else { 0.0 };
+        cnt[i + 1] = cnt[i] + usize::from(ok);
+    }
+    let smooth: Vec<f64> = (0..n)
+        .map(|i| {
+            let (a, b) = (i.saturating_sub(w), (i + w + 1).min(n));
+            let c = cnt[b] - cnt[a];
+            if c == 0 { f64::NAN } else { (sum[b] - sum[a]) / c as f64 }
+        })
+        .collect();
+    (0..n)
+        .map(|i| {
+            let (a, b) = (i.saturating_sub(w), (i + w + 1).min(n));
+            let (mut lo, mut hi) = (f64::INFINITY, f64::NEG_INFINITY);
+            for &s in &smooth[a..b] {
+                if s.is_finite() {
+                    lo = lo.min(s);
+                    hi = hi.max(s);
+                }
+            }
+            hi > lo && hi - lo > tol(smooth[i].abs())
+        })
+        .collect()
+}
+
+/// Sweeps of one signal over rows `a..b`: each starts where the signal leaves zero and ends
+/// where it is back at zero having been to both sides, or has stayed quiet for `idle` rows
+/// after going to one side. Returns inclusive row ranges.
+fn excursions(x: &[f64], a: usize, b: usize, zero: f64, on: f64, idle: usize) -> Vec<(usize, usize)> {
+    let mut out = Vec::new();
+    let mut open: Option<usize> = None;
+    let (mut pos, mut neg) = (false, false);
+    let mut quiet_since: Option<usize> = None;
+    let mut last_zero: Option<usize> = None;
+    for i in a..b {
+        let v = x[i];
+        let quiet = v.abs() <= on;
+        let at_zero = v.abs() <= zero;
+        match open {
+            None => {
+                if quiet {
+                    quiet_since.get_or_insert(i);
+                    if at_zero {
+                        last_zero = Some(i);
+                    }
+                } else {
+                    if let Some(q) = quiet_since {
+                        let start = last_zero.filter(|&z| z >= q).unwrap_or(q);
+                        open = Some(start);
+                        pos = v > on;
+                        neg = v < -on;
+                    }
+                    quiet_since = None;
+                }
+            }
+            Some(s) => {
+                pos |= v > on;
+                neg |= v < -on;
+                if quiet {
+                    let q = *quiet_since.get_or_insert(i);
+                    let close = if pos && neg && at_zero {
+                        Some(i)
+                    } else if i - q >= idle {
+                        Some(q)
+                    } else {
+                        None
+                    };
+                    if let Some(e) = close {
+                        out.push((s, e));
+                        open = None;
+                        pos = false;
+                        neg = false;
+                        quiet_since = Some(e);
+                        last_zero = (x[e].abs() <= zero).then_some(e);
+                        if at_zero {
+                            last_zero = Some(i);
+                        }
+                    }
+                } else {
+                    quiet_since = None;
+                }
+            }
+        }
+    }
+    if let (Some(s), Some(q)) = (open, quiet_since) {
+        out.push((s, q));
+    }
+    out
+}
+
+/// Finds the sweeps of a run. `test` is what the file says its test is, if it says.
+pub fn find_sweeps(
+    sig: &Signals,
+    kappa_source: KappaSource,
+    test: Option<TestKind>,
+    opt: &SweepOptions,
+) -> Segmentation {
+    let n = sig.fz_n.len();
+    let mut why: Vec<Option<Exclusion>> = vec![None; n];
+    let dt = {
+        let d = median_of(sig.time_s.windows(2).map(|w| w[1] - w[0]).filter(|d| *d > 0.0));
+        if d.is_finite() && d > 0.0 { d } else { 0.01 }
+    };
+    let rows_of = |s: f64| ((s / dt).round() as usize).clamp(1, 100_000);
+    let w = rows_of(opt.hold_window_s);
+    let uses_kappa = kappa_source != KappaSource::Absent;
+    let fz_high = {
+        let mut a: Vec<f64> = sig.fz_n.iter().copied().filter(|x| x.is_finite()).collect();
+        if a.is_empty() {
+            0.0
+        } else {
+            let k = ((a.len() - 1) as f64 * 0.98) as usize;
+            *a.select_nth_unstable_by(k, f64::total_cmp).1
+        }
+    };
+    for i in 0..n {
+        let v = sig.v_mps.as_ref().map(|v| v[i]);
+        why[i] = if !sig.fz_n[i].is_finite()
+            || !sig.alpha_rad[i].is_finite()
+            || (uses_kappa && !sig.kappa[i].is_finite())
+            || v.is_some_and(|v| !v.is_finite())
+        {
+            Some(Exclusion::NonFinite)
+        } else if v.is_some_and(|v| v.abs() < opt.standstill_mps) {
+            Some(Exclusion::Standstill)
+        } else if sig.fz_n[i] < (opt.unloaded_fraction * fz_high).max(50.0) {
+            Some(Exclusion::Unloaded)
+        } else {
+            None
+        };
+    }
+    let held: [(&[f64], Exclusion, Box<dyn Fn(f64) -> f64>); 4] = [
+        (&sig.fz_n, Exclusion::LoadRamp, Box::new(|l| (opt.fz_tol_fraction * l).max(opt.fz_tol_n))),
+        (&sig.p_pa, Exclusion::PressureRamp, Box::new(|l| (0.03 * l).max(opt.p_tol_pa))),
+        (&sig.gamma_rad, Exclusion::CamberChange, Box::new(|_| opt.gamma_tol_rad)),
+        (sig.v_mps.as_deref().unwrap_or(&[]), Exclusion::SpeedChange, Box::new(|l| (0.05 * l).max(opt.v_tol_mps))),
+    ];
+    for (x, reason, tol) in held.iter() {
+        if x.len() != n {
+            continue;
+        }
+        let bad = unsteady(x, w, tol);
+        for i in 0..n {
+            if why[i].is_none() && bad[i] {
+                why[i] = Some(*reason);
+            }
+        }
+    }
+    let sa_deg: Vec<f64> = sig.alpha_rad.iter().map(|a| a.to_degrees()).collect();
+    let sa_moving = unsteady(&sa_deg, w, |_| opt.sa_moving_deg);
+    let (kz, kon) = match kappa_source {
+        KappaSource::EffectiveRadius => (opt.sr_zero, opt.sr_on),
+        _ => (opt.kappa_zero, opt.kappa_on),
+    };
+    // SR is meaningless where the wheel rolls free: a cornering test has no slip-ratio sweeps.
+    let kappa_ignored = kappa_source == KappaSource::EffectiveRadius && test == Some(TestKind::Cornering);
+    let look_for_kappa = uses_kappa && !kappa_ignored;
+    let idle = rows_of(opt.idle_split_s);
+    let fill = rows_of(1.0);
+    let mut raw: Vec<(bool, usize, usize)> = Vec::new(); // (slip angle?, first, last)
+    let mut i = 0;
+    while i < n {
+        if why[i].is_some() {
+            i += 1;
+            continue;
+        }
+        let a = i;
+        while i < n && why[i].is_none() {
+            i += 1;
+        }
+        let b = i;
+        // Moving and held pieces of the slip angle; held gaps shorter than 1 s between moving
+        // rows (turn-arounds) belong to the sweep.
+        let mut moving: Vec<bool> = sa_moving[a..b].to_vec();
+        let mut k = 0;
+        while k < moving.len() {
+            if !moving[k] {
+                let s = k;
+                while k < moving.len() && !moving[k] {
+                    k += 1;
+                }
+                if s > 0 && k < moving.len() && k - s < fill {
+                    moving[s..k].iter_mut().for_each(|m| *m = true);
+                }
+            } else {
+                k += 1;
+            }
+        }
+        let mut k = 0;
+        while k < moving.len() {
+            let s = k;
+            let m = moving[k];
+            while k < moving.len() && moving[k] == m {
+                k += 1;
+            }
+            let (pa, pb) = (a + s, a + k);
+            if m {
+                for (f, l) in excursions(&sa_deg, pa, pb, opt.sa_zero_deg, opt.sa_on_deg, idle) {
+                    raw.push((true, f, l));
+                }
+                for r in pa..pb {
+                    why[r] = Some(Exclusion::SlipAngleChange);
+                }
+            } else {
+                if look_for_kappa {
+                    for (f, l) in excursions(&sig.kappa, pa, pb, kz, kon, idle) {
+                        raw.push((false, f, l));
+                    }
+                }
+                for r in pa..pb {
+                    why[r] = Some(Exclusion::Idle);
+                }
+            }
+        }
+    }
+    // Which rows a sweep with no return to zero at its end left behind is told apart below.
+    let min_rows = rows_of(opt.min_sweep_s).max(10);
+    let mut sweeps = Vec::new();
+    let mut sr_zeroed = 0;
+    for (is_sa, f, l) in raw {
+        if l + 1 - f < min_rows {
+            for r in f..=l {
+                why[r] = Some(Exclusion::ShortSweep);
+            }
+            continue;
+        }
+        let rows = f..=l;
+        let med = |x: &[f64]| median_of(x[rows.clone()].iter().copied());
+        let alpha = med(&sig.alpha_rad);
+        let (kind, reach) = if is_sa {
+            (SweepKind::Cornering, sig.alpha_rad[rows.clone()].iter().fold(0.0_f64, |m, a| m.max(a.abs())))
+        } else {
+            let k = if alpha.abs() < 1.0_f64.to_radians() { SweepKind::DriveBrake } else { SweepKind::Combined };
+            (k, sig.kappa[rows.clone()].iter().fold(0.0_f64, |m, a| m.max(a.abs())))
+        };
+        let kappa = if is_sa && kappa_source == KappaSource::EffectiveRadius {
+            sr_zeroed += l + 1 - f;
+            0.0
+        } else if is_sa {
+            med(&sig.kappa)
+        } else {
+            0.0
+        };
+        let cell = Cell {
+            kind,
+            fz_n: med(&sig.fz_n),
+            p_pa: med(&sig.p_pa),
+            gamma_rad: med(&sig.gamma_rad),
+            alpha_rad: if is_sa { 0.0 } else { alpha },
+            kappa,
+            // 0 when the file has no speed channel (a JSON-safe "unknown").
+            vx_mps: sig.v_mps.as_ref().map(|v| med(v)).filter(|v| v.is_finite()).unwrap_or(0.0),
+            slip_reach: reach,
+        };
+        for r in f..=l {
+            why[r] = None;
+        }
+        sweeps.push(FoundSweep { cell, conditioning: false, first: f, last: l });
+    }
+    // Rows of moving pieces outside any sweep: a sweep cut off, or a slip angle being set.
+    mark_incomplete(&mut why, &sa_deg, opt.sa_zero_deg);
+    sweeps.sort_by_key(|s| s.first);
+    mark_conditioning(&mut sweeps, opt.conditioning_fraction);
+    let mut sweeps = merge_conditioning(sweeps, &why);
+    // Back-to-back sweeps share their boundary row: give it to the first.
+    for k in 1..sweeps.len() {
+        let prev_last = sweeps[k - 1].last;
+        if sweeps[k].first <= prev_last {
+            sweeps[k].first = prev_last + 1;
+        }
+    }
+    sweeps.retain(|s| s.first <= s.last);
+    for s in &sweeps {
+        why[s.first..=s.last].iter_mut().for_each(|w| *w = None);
+    }
+    let mut excluded: Vec<(Exclusion, usize)> = Vec::new();
+    for r in why.into_iter().flatten() {
+        match excluded.iter_mut().find(|(e, _)| *e == r) {
+            Some((_, c)) => *c += 1,
+            None => excluded.push((r, 1)),
+        }
+    }
+    excluded.sort();
+    Segmentation { sweeps, excluded, sr_zeroed, kappa_ignored }
+}
+
+/// A slip-angle stretch that leaves zero and never returns is a sweep cut off by a ramp or the
+/// end of the data, unless it only moved to a held angle (set between slip-ratio sweeps).
+fn mark_incomplete(why: &mut [Option<Exclusion>], sa_deg: &[f64], zero: f64) {
+    let n = why.len();
+    let mut i = 0;
+    while i < n {
+        if why[i] != Some(Exclusion::SlipAngleChange) {
+            i += 1;
+            continue;
+        }
+        let s = i;
+        while i < n && why[i] == Some(Exclusion::SlipAngleChange) {
+            i += 1;
+        }
+        // A sweep crosses zero; setting a held angle goes from one level to another.
+        let crosses = sa_deg[s..i].iter().any(|v| *v > zero) && sa_deg[s..i].iter().any(|v| *v < -zero);
+        if crosses {
+            why[s..i].iter_mut().for_each(|w| *w = Some(Exclusion::IncompleteSweep));
+        }
+    }
+}
+
+/// Sweeps reaching less than `fraction` of their family's typical reach (the 75th percentile
+/// of the slip-angle sweeps, or of the slip-ratio sweeps) are conditioning sweeps.
+fn mark_conditioning(sweeps: &mut [FoundSweep], fraction: f64) {
+    for sa in [true, false] {
+        let fam = |s: &FoundSweep| (s.cell.kind == SweepKind::Cornering) == sa;
+        let mut reach: Vec<f64> = sweeps.iter().filter(|s| fam(s)).map(|s| s.cell.slip_reach).collect();
+        if reach.len() < 2 {
+            continue;
+        }
+        reach.sort_by(f64::total_cmp);
+        let typical = reach[(reach.len() - 1) * 3 / 4];
+        for s in sweeps.iter_mut().filter(|s| fam(s)) {
+            s.conditioning = s.cell.slip_reach < fraction * typical;
+        }
+    }
+}
+
+/// Conditioning sweeps that follow each other at one cell, with only rolling (or the slip angle
+/// settling) between them, are
+/// one warm-up.
+fn merge_conditioning(sweeps: Vec<FoundSweep>, why: &[Option<Exclusion>]) -> Vec<FoundSweep> {
+    let mut out: Vec<FoundSweep> = Vec::with_capacity(sweeps.len());
+    for s in sweeps {
+        if let Some(p) = out.last_mut()
+            && p.conditioning
+            && s.conditioning
+            && p.cell.kind == s.cell.kind
+            && (p.cell.fz_n - s.cell.fz_n).abs() <= (0.05 * p.cell.fz_n.abs()).max(50.0)
+            && (p.cell.p_pa - s.cell.p_pa).abs() <= 5_000.0
+            && (p.cell.gamma_rad - s.cell.gamma_rad).abs() <= 0.5_f64.to_radians()
+            && why.get(p.last + 1..s.first).is_some_and(|gap| {
+                gap.iter().all(|w| matches!(w, None | Some(Exclusion::Idle | Exclusion::SlipAngleChange)))
+            })
+        {
+            p.last = s.last;
+            p.cell.slip_reach = p.cell.slip_reach.max(s.cell.slip_reach);
+            continue;
+        }
+        out.push(s);
+    }
+    out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn excursions_split_full_and_one_sided_sweeps() {
+        // 0 → -5 → +5 → 0, twice, then one-sided 0 → 3 → 0 and a long rest.
+        let mut x = Vec::new();
+        for _ in 0..2 {
+            x.extend((0..50).map(|i| -(i as f64) / 10.0));
+            x.extend((0..100).map(|i| -5.0 + i as f64 / 10.0));
+            x.extend((0..50).map(|i| 5.0 - i as f64 / 10.0));
+        }
+        x.extend((0..30).map(|i| i as f64 / 10.0));
+        x.extend((0..30).map(|i| 3.0 - i as f64 / 10.0));
+        x.extend(std::iter::repeat_n(0.0, 300));
+        let s = excursions(&x, 0, x.len(), 0.5, 1.0, 100);
+        assert_eq!(s.len(), 3, "{s:?}");
+        assert!(s[0].0 <= 5 && (194..=200).contains(&s[0].1), "{s:?}");
+        // Back to back: the next starts where the signal last sat at zero.
+        assert!((s[0].1..=s[0].1 + 10).contains(&s[1].0), "{s:?}");
+        assert!(s[2].0 >= 395 && s[2].1 >= 450 && s[2].1 < 470, "{s:?}");
+    }
+
+    #[test]
+    fn unsteady_flags_a_ramp_not_noise() {
+        let x: Vec<f64> = (0..600)
+            .map(|i| if i < 250 { 1000.0 } else if i < 300 { 1000.0 + (i - 250) as f64 * 10.0 } else { 1500.0 } + if i % 2 == 0 { 15.0 } else { -15.0 })
+            .collect();
+        let bad = unsteady(&x, 25, |l| (0.06 * l).max(60.0));
+        assert!(!bad[100] && !bad[500]);
+        assert!(bad[275]);
+        assert!(bad.iter().filter(|b| **b).count() < 120);
+    }
+}
