@@ -12,5 +12,6 @@
 //! Pure library: no DDS, no clock.
 
 pub mod table;
+pub mod virtual_export;
 
 pub use table::{ChannelTable, Column};

@@ -11,6 +11,8 @@ use mffit::tydex::Convention;
 pub enum ExportCmd {
     /// Write a log's sweep data as a TYDEX .tdx file (ISO-W, the thesis's channels)
     Tydex(ExportTydexArgs),
+    /// Write a virtual rig run as a Calspan TIRF / TTC-style .dat with every quirk of real files
+    Ttc(crate::cmd_export_ttc::ExportTtcArgs),
 }
 
 /// Arguments of `tyrerig export tydex`.
@@ -68,6 +70,7 @@ pub fn run_export(cmd: ExportCmd) -> Result<()> {
             eprintln!("wrote {} ({} segments, {} samples)", out.display(), data.segments.len(), data.len());
             Ok(())
         }
+        ExportCmd::Ttc(a) => crate::cmd_export_ttc::run(a),
     }
 }
 

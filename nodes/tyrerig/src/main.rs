@@ -10,6 +10,7 @@ use clap::{Parser, Subcommand};
 mod cmd_bench;
 mod cmd_data;
 mod cmd_doctor;
+mod cmd_export_ttc;
 mod cmd_fit;
 mod cmd_launch;
 mod cmd_mcap;
@@ -39,7 +40,7 @@ enum Command {
     Doctor(Box<cmd_doctor::DoctorArgs>),
     /// Fit an MF-Tyre 6.1 model (.tir) to GS2MF logs, staged as in the thesis
     Fit(Box<cmd_fit::FitArgs>),
-    /// Export log data (TYDEX)
+    /// Export log data (TYDEX, TTC-style .dat)
     #[command(subcommand)]
     Export(cmd_data::ExportCmd),
     /// Import legacy rig data (Calspan TTC-style, TYDEX) into an MCAP log the fitter reads
