@@ -37,6 +37,11 @@ impl std::str::FromStr for SweepStyle {
 pub struct RunInputs {
     /// ETRTO load index of the tyre (drives Fz0).
     pub load_index: u32,
+    /// The tyre's nominal load Fz0 \[N\] when given directly, replacing the load index's:
+    /// tyres outside the ETRTO table (a race tyre's ~1 kN). The graph sweeps' absolute loads
+    /// (written for the thesis's tyre) then scale by Fz0 / 6,759 N (load index 110's Fz0).
+    #[serde(default)]
+    pub fz0_n: Option<f64>,
     /// The three inflation pressures (low, mid, high) \[bar\].
     pub pressures_bar: [f64; 3],
     /// Nominal speed \[m/s\] (thesis: 16.6 m/s).
@@ -52,6 +57,7 @@ impl Default for RunInputs {
     fn default() -> Self {
         Self {
             load_index: 110,
+            fz0_n: None,
             pressures_bar: [2.1, 2.6, 3.3],
             nominal_speed_mps: 16.6,
             sweeps: SweepStyle::Variable,
@@ -68,6 +74,14 @@ impl RunInputs {
                 message: format!("expected three positive pressures, got {:?}", self.pressures_bar),
             });
         }
+        if let Some(f) = self.fz0_n
+            && !(f.is_finite() && f > 0.0)
+        {
+            return Err(ProcedureError::BadInput {
+                key: "fz0_n",
+                message: format!("expected a positive load, got {f}"),
+            });
+        }
         if !(self.nominal_speed_mps.is_finite() && self.nominal_speed_mps > 0.0) {
             return Err(ProcedureError::BadInput {
                 key: "nominal_speed_mps",
@@ -81,7 +95,10 @@ impl RunInputs {
 /// Expand `doc` with `inputs` into a plan, checked against the rig envelope.
 pub fn expand(doc: &ProcedureDoc, inputs: &RunInputs) -> Result<Plan, ProcedureError> {
     inputs.validate()?;
-    let fz0 = fz0_n(inputs.load_index)?;
+    let fz0 = match inputs.fz0_n {
+        Some(f) => f,
+        None => fz0_n(inputs.load_index)?,
+    };
     let h = &doc.spec.procedure;
     let mut b = Builder {
         inputs: *inputs,
@@ -124,6 +141,8 @@ struct Ctx<'a> {
     tag: &'a str,
     section_index: usize,
     pressure_slot: Option<PressureSlot>,
+    /// The section's absolute pressure (`pressure_bar` / `pressures_bar`), if it gives one.
+    pressure_bar: Option<f64>,
     mode: RigMode,
     specimen: String,
     ref_s: f64,
@@ -142,14 +161,20 @@ impl Builder {
                 .clone()
                 .or_else(|| specimen_override.map(str::to_owned))
                 .unwrap_or_else(|| h.specimen.clone());
-            let slots: Vec<Option<PressureSlot>> = match (&s.pressures, s.pressure) {
-                (Some(ps), _) => ps.iter().copied().map(Some).collect(),
-                (None, Some(p)) => vec![Some(p)],
-                (None, None) => vec![None],
-            };
-            for slot in slots {
-                let name = match (slot, s.pressures.is_some()) {
-                    (Some(p), true) => format!("{}_{}bar", s.name, prim::fmt_num(self.inputs.pressures_bar[p.index()])),
+            let slots: Vec<(Option<PressureSlot>, Option<f64>)> =
+                match (&s.pressures, s.pressure, &s.pressures_bar, s.pressure_bar) {
+                    (Some(ps), ..) => ps.iter().map(|p| (Some(*p), None)).collect(),
+                    (None, Some(p), ..) => vec![(Some(p), None)],
+                    (None, None, Some(bars), _) => bars.iter().map(|b| (None, Some(*b))).collect(),
+                    (None, None, None, Some(b)) => vec![(None, Some(b))],
+                    (None, None, None, None) => vec![(None, None)],
+                };
+            for (slot, bar) in slots {
+                let name = match (slot, bar, s.pressures.is_some() || s.pressures_bar.is_some()) {
+                    (Some(p), _, true) => {
+                        format!("{}_{}bar", s.name, prim::fmt_num(self.inputs.pressures_bar[p.index()]))
+                    }
+                    (None, Some(b), true) => format!("{}_{}bar", s.name, prim::fmt_num(b)),
                     _ => s.name.clone(),
                 };
                 let specimen = match (s.specimen_per_pressure, slot) {
@@ -163,6 +188,7 @@ impl Builder {
                     tag: &h.config_tag,
                     section_index: self.sections.len() - 1,
                     pressure_slot: slot,
+                    pressure_bar: bar,
                     mode: s.mode.unwrap_or(h.mode),
                     specimen: specimen.clone(),
                     ref_s: h.free_rolling_ref_s,
@@ -264,7 +290,8 @@ impl Builder {
             let r = prim::free_rolling_ref(start, ctx.ref_s);
             self.push_raw(ctx, r, "FreeRollingRef".into(), group);
         }
-        let name = self.name(ctx.tag, &seg);
+        // Only data steps take a sweep number; a standstill keeps its plain name.
+        let name = if seg.kind.is_data() { self.name(ctx.tag, &seg) } else { seg.type_name.clone() };
         self.push_raw(ctx, seg, name, group);
     }
 
@@ -281,10 +308,14 @@ impl Builder {
     }
 
     fn base(&self, ctx: &Ctx, st: &StepSpec, slot: Option<PressureSlot>) -> Setpoint {
-        let p = slot.or(ctx.pressure_slot).unwrap_or(PressureSlot::Mid);
+        // A step's own slot first, then the section's bar or slot, else the middle pressure.
+        let pressure_bar = match (slot, ctx.pressure_bar) {
+            (None, Some(bar)) => bar,
+            _ => self.inputs.pressures_bar[slot.or(ctx.pressure_slot).unwrap_or(PressureSlot::Mid).index()],
+        };
         Setpoint {
             mode: st.mode.unwrap_or(ctx.mode),
-            pressure_bar: self.inputs.pressures_bar[p.index()],
+            pressure_bar,
             speed_mps: st.speed_mps.unwrap_or(self.inputs.nominal_speed_mps),
             fz_n: self.fz0,
             ..Setpoint::default()
@@ -397,7 +428,29 @@ impl Builder {
                     // Graph sweeps are identical for every tyre: the nominal 16.6 m/s unless
                     // the file says otherwise, whatever the run's nominal speed.
                     b.speed_mps = st.speed_mps.unwrap_or(16.6);
-                    segs.extend(prim::graph_sweep_block(block, self.inputs.pressures_bar, b));
+                    // Written for the thesis's tyre class; a tyre given by its Fz0 (another
+                    // class) gets the same load factors of its own Fz0.
+                    let load_scale = match self.inputs.fz0_n {
+                        Some(f) => f / fz0_n(crate::load_index::THESIS_LOAD_INDEX)?,
+                        None => 1.0,
+                    };
+                    segs.extend(prim::graph_sweep_block_scaled(block, self.inputs.pressures_bar, b, load_scale));
+                }
+                StepKindSpec::Standstill => {
+                    // Belt stopped, wheel loaded, zero slip: the settle before it brings the
+                    // belt to rest at the rig's acceleration and ramps the load.
+                    let mut sp = base;
+                    sp.mode = RigMode::FreeRolling;
+                    sp.speed_mps = 0.0;
+                    sp.fz_n = st.fz_n.unwrap_or(loads[0]);
+                    sp.camber_deg = cambers[0];
+                    let k = crate::sweep::Keyframes::start(sp).hold(st.hold_s.unwrap_or(0.0));
+                    segs.push(Segment {
+                        kind: StepKind::Settle,
+                        type_name: st.label.clone().unwrap_or_else(|| "Standstill".into()),
+                        trajectory: crate::sweep::Trajectory::Keyframes(k),
+                        thermal_pause_after: false,
+                    });
                 }
                 StepKindSpec::Hold => {
                     let mut sp = base;
@@ -415,7 +468,7 @@ impl Builder {
             }
         }
         for mut s in segs {
-            if let (Some(label), true) = (&st.label, kind != StepKindSpec::Hold) {
+            if let (Some(label), true) = (&st.label, !matches!(kind, StepKindSpec::Hold | StepKindSpec::Standstill)) {
                 s.type_name = format!("{label}_{}", s.type_name);
             }
             if let Some(tp) = st.thermal_pause {

@@ -173,6 +173,13 @@ pub struct SectionSpec {
     /// Run the whole section once per pressure, in order.
     #[serde(default)]
     pub pressures: Option<Vec<PressureSlot>>,
+    /// Run the whole section once at this absolute pressure \[bar\] (plans written for one
+    /// tyre class, e.g. TTC-style runs at four pressures).
+    #[serde(default)]
+    pub pressure_bar: Option<f64>,
+    /// Run the whole section once per absolute pressure \[bar\], in order.
+    #[serde(default)]
+    pub pressures_bar: Option<Vec<f64>>,
     /// Rig mode for the section's steps.
     #[serde(default)]
     pub mode: Option<RigMode>,
@@ -210,6 +217,8 @@ pub enum StepKindSpec {
     GraphSweeps,
     /// Plain hold at zero slip.
     Hold,
+    /// Belt stopped with the load applied (the standstill real run files start and end with).
+    Standstill,
 }
 
 /// `[[section.step]]`: one flat table; which keys are allowed depends on `kind`.
@@ -289,6 +298,7 @@ impl StepKindSpec {
             Self::WarmUp => "warm_up",
             Self::GraphSweeps => "graph_sweeps",
             Self::Hold => "hold",
+            Self::Standstill => "standstill",
         }
     }
 
@@ -354,6 +364,7 @@ impl StepKindSpec {
             Self::WarmUp => &["blocks", "peak_deg", "rate_dps", "roll_s", "load", "loads", "speed_mps"],
             Self::GraphSweeps => &["block", "speed_mps"],
             Self::Hold => &["hold_s", "load", "fz_n", "camber_deg", "speed_mps", "slip_angle_deg"],
+            Self::Standstill => &["hold_s", "load", "fz_n", "camber_deg"],
         }
     }
 }
@@ -607,6 +618,35 @@ fn validate(file: &str, src: &str, spec: &ProcedureFile) -> Result<(), Procedure
         if s.pressures.as_ref().is_some_and(Vec::is_empty) {
             return Err(invalid(span, "pressures", "expected at least one pressure".into()));
         }
+        let slots = s.pressure.is_some() || s.pressures.is_some();
+        if slots && (s.pressure_bar.is_some() || s.pressures_bar.is_some()) {
+            return Err(invalid(
+                span,
+                "pressures_bar",
+                "give either pressure slots (`pressure`, `pressures`) or bars (`pressure_bar`, `pressures_bar`), not both"
+                    .into(),
+            ));
+        }
+        if s.pressure_bar.is_some() && s.pressures_bar.is_some() {
+            return Err(invalid(
+                span,
+                "pressures_bar",
+                "give either `pressure_bar` or `pressures_bar`, not both".into(),
+            ));
+        }
+        if s.pressures_bar.as_ref().is_some_and(Vec::is_empty) {
+            return Err(invalid(span, "pressures_bar", "expected at least one pressure".into()));
+        }
+        for (key, p) in s
+            .pressure_bar
+            .iter()
+            .map(|p| ("pressure_bar", *p))
+            .chain(s.pressures_bar.iter().flatten().map(|p| ("pressures_bar", *p)))
+        {
+            if !(p.is_finite() && p > 0.0) {
+                return Err(invalid(span.clone(), key, format!("expected a positive pressure in bar, got {p}")));
+            }
+        }
         if s.step.is_empty() {
             return Err(invalid(span, "step", format!("section `{}` has no [[section.step]]", s.name)));
         }
@@ -627,7 +667,7 @@ fn validate_step(
             span,
             "kind",
             "missing: expected one of sweep, vertical_load, on_centre, rolling_radius, \
-             step_steer, static_long, warm_up, graph_sweeps, hold"
+             step_steer, static_long, warm_up, graph_sweeps, hold, standstill"
                 .into(),
         ));
     };
@@ -748,7 +788,7 @@ fn validate_step(
             }
             Ok(())
         }
-        StepKindSpec::Hold => require(st.hold_s, "hold_s", span, invalid),
+        StepKindSpec::Hold | StepKindSpec::Standstill => require(st.hold_s, "hold_s", span, invalid),
     }
 }
 

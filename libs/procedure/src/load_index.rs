@@ -6,6 +6,9 @@ pub const G_MPS2: f64 = 9.81;
 /// Fz0 is 65 % of the ETRTO capacity (§3.3 of the thesis): a typical static corner load.
 pub const FZ0_FRACTION_OF_CAPACITY: f64 = 0.65;
 
+/// The thesis's tyre's load index (Fz0 = 6,759 N): the graph sweeps' absolute loads are its.
+pub const THESIS_LOAD_INDEX: u32 = 110;
+
 /// Lowest load index in [`LOAD_CAPACITY_KG`].
 pub const LOAD_INDEX_MIN: u32 = 60;
 

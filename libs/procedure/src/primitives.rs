@@ -397,6 +397,17 @@ pub const GRAPH_BRKDRV_PEAK: f64 = 0.25;
 /// N, fixed laws: never replaced by continually variable sweeps, so blocks stay comparable
 /// across tyres and procedures). `pressures_bar` = (low, mid, high).
 pub fn graph_sweep_block(block: GraphBlock, pressures_bar: [f64; 3], base: Setpoint) -> Vec<Segment> {
+    graph_sweep_block_scaled(block, pressures_bar, base, 1.0)
+}
+
+/// [`graph_sweep_block`] with every load multiplied by `load_scale`: for tyres of another class
+/// (a race tyre's Fz0 of ~1 kN), the same load factors of its own Fz0.
+pub fn graph_sweep_block_scaled(
+    block: GraphBlock,
+    pressures_bar: [f64; 3],
+    base: Setpoint,
+    load_scale: f64,
+) -> Vec<Segment> {
     let mid = pressures_bar[1];
     // (load N, camber deg, pressure bar)
     let cases: [(f64, f64, f64); 5] = match block {
@@ -416,7 +427,7 @@ pub fn graph_sweep_block(block: GraphBlock, pressures_bar: [f64; 3], base: Setpo
         .map(|&(fz, camber, p)| {
             let mut b = base.zero_slip();
             b.pressure_bar = p;
-            b.fz_n = fz;
+            b.fz_n = fz * load_scale;
             b.camber_deg = camber;
             let (axis, path) = match block {
                 GraphBlock::FreeRolling => {
@@ -432,7 +443,7 @@ pub fn graph_sweep_block(block: GraphBlock, pressures_bar: [f64; 3], base: Setpo
                 axis,
                 path,
                 b,
-                LoadCoupling::Constant { fz_n: fz },
+                LoadCoupling::Constant { fz_n: fz * load_scale },
                 CamberCoupling::Constant { camber_deg: camber },
             );
             s.type_name = format!("GraphSweep_{}", s.type_name);

@@ -230,3 +230,106 @@ fn fingerprint_tracks_tyre_and_pressures() {
     let d = plan_with("gs2mf_staticlong.toml", RunInputs { pressures_bar: [2.0, 2.6, 3.3], ..RunInputs::default() });
     assert_ne!(a.fingerprint(), d.fingerprint());
 }
+
+/// Inputs of the brush race tyre: Fz0 given directly (no ETRTO index reaches 1.1 kN) and a race
+/// tyre's pressures, inside an envelope that goes down to 0.5 bar.
+fn race_inputs() -> RunInputs {
+    let mut i = RunInputs { fz0_n: Some(1100.0), pressures_bar: [0.7, 0.84, 0.98], ..RunInputs::default() };
+    i.limits.min_pressure_bar = 0.5;
+    i
+}
+
+/// Every distinct (load, pressure, slip angle, camber) at the start of the plan's sweeps.
+fn sweep_cells(p: &Plan) -> Vec<(f64, f64, f64, f64)> {
+    p.steps
+        .iter()
+        .filter(|s| s.kind == StepKind::Sweep)
+        .map(|s| {
+            let a = s.trajectory.start();
+            (a.fz_n, a.pressure_bar, a.slip_angle_deg, a.camber_deg)
+        })
+        .collect()
+}
+
+/// Largest |f| along a step's trajectory, sampled every millisecond.
+fn peak_of(s: &procedure::PlanStep, f: impl Fn(&procedure::Setpoint) -> f64) -> f64 {
+    let n = (s.duration_s * 1000.0).ceil() as usize;
+    (0..=n).map(|k| f(&s.trajectory.at(s.duration_s * k as f64 / n as f64)).abs()).fold(0.0, f64::max)
+}
+
+#[test]
+fn ttc_cornering_run_has_four_pressures_six_loads_standstills_and_no_pauses() {
+    let p = plan_with("ttc_cornering_race.toml", race_inputs());
+    assert!((p.fz0_n - 1100.0).abs() < 1e-9);
+    assert!(p.steps.iter().all(|s| !s.thermal_pause_after), "no thermal pauses");
+    let sweeps: Vec<_> = p.steps.iter().filter(|s| s.kind == StepKind::Sweep).collect();
+    assert_eq!(sweeps.len(), 4 * 7, "per pressure a conditioning sweep and six load sweeps");
+    let cells = sweep_cells(&p);
+    let pressures: Vec<f64> = cells.iter().step_by(7).map(|c| c.1).collect();
+    assert_eq!(pressures, [0.7, 0.84, 0.98, 1.12]);
+    let loads: Vec<f64> = cells[1..7].iter().map(|c| c.0.round()).collect();
+    assert_eq!(loads, [1100.0, 1540.0, 660.0, 220.0, 1100.0, 440.0]);
+    for s in &sweeps {
+        let peak = peak_of(s, |sp| sp.slip_angle_deg);
+        let conditioning = s.name.contains("Conditioning");
+        assert!((peak - if conditioning { 4.0 } else { 13.0 }).abs() < 0.01, "{}: {peak}", s.name);
+        assert!((s.trajectory.start().speed_mps - 11.1).abs() < 1e-9);
+    }
+    // Standstill (belt stopped, load on) first and last; pressure changes in between.
+    let still: Vec<_> = p.steps.iter().filter(|s| s.name == "Standstill").collect();
+    assert_eq!(still.len(), 2);
+    for s in &still {
+        assert_eq!(s.kind, StepKind::Settle);
+        let a = s.trajectory.start();
+        assert!(a.speed_mps == 0.0 && (a.fz_n - 1100.0).abs() < 1e-9 && s.duration_s > 5.0);
+    }
+    assert_eq!(p.steps.iter().rposition(|s| s.name == "Standstill"), Some(p.steps.len() - 1));
+    assert_eq!(p.steps.iter().filter(|s| s.kind == StepKind::PressureChange).count(), 3, "0.7 → 0.84 → 0.98 → 1.12");
+    // The same file with the default (1.0 bar) envelope is refused, naming the pressure.
+    let doc = load(&dir().join("ttc_cornering_race.toml")).unwrap();
+    let e = expand(&doc, &RunInputs { fz0_n: Some(1100.0), ..RunInputs::default() }).unwrap_err().to_string();
+    assert!(e.contains("pressure"), "{e}");
+}
+
+#[test]
+fn ttc_drive_brake_run_covers_every_cell_at_one_pressure() {
+    let p = plan_with("ttc_drive_brake_race.toml", race_inputs());
+    assert!(p.steps.iter().all(|s| !s.thermal_pause_after));
+    let cells = sweep_cells(&p);
+    assert_eq!(cells.len(), 4 * 3 * 3 + 1, "four loads x three cambers x three slip angles, the first again");
+    assert!(cells.iter().all(|c| (c.1 - 0.84).abs() < 1e-12));
+    for load in [220.0, 660.0, 1100.0, 1540.0] {
+        for sa in [0.0, 3.0, 6.0] {
+            for ia in [0.0, 2.0, 4.0] {
+                assert!(cells.iter().any(|c| (c.0 - load).abs() < 1e-6 && c.2 == sa && c.3 == ia), "{load} {sa} {ia}");
+            }
+        }
+    }
+    assert_eq!(cells.first(), cells.last(), "the first cell repeated at the end");
+    for s in p.steps.iter().filter(|s| s.kind == StepKind::Sweep) {
+        let peak = peak_of(s, |sp| sp.slip_ratio);
+        assert!((peak - 0.2).abs() < 2e-4, "{}: {peak}", s.name);
+        assert!((3.0..=9.0).contains(&s.duration_s), "{}: {} s", s.name, s.duration_s);
+    }
+    assert_eq!(p.steps.iter().filter(|s| s.name == "Standstill").count(), 2);
+}
+
+#[test]
+fn fz0_given_directly_replaces_the_load_index_and_scales_graph_sweeps() {
+    let li = plan_with("gs2mf_freerolling.toml", RunInputs::default());
+    let direct = plan_with("gs2mf_freerolling.toml", RunInputs { fz0_n: Some(1100.0), ..RunInputs::default() });
+    assert!((direct.fz0_n - 1100.0).abs() < 1e-12);
+    let graph_loads = |p: &Plan| -> Vec<f64> {
+        p.steps.iter().filter(|s| s.name.contains("GraphSweep")).map(|s| s.trajectory.start().fz_n).collect()
+    };
+    let (a, b) = (graph_loads(&li), graph_loads(&direct));
+    assert!(!a.is_empty() && a.len() == b.len());
+    assert!((a[0] - 6000.0).abs() < 1e-9, "load-index runs keep the thesis's absolute loads");
+    for (x, y) in a.iter().zip(&b) {
+        assert!((y / x - 1100.0 / procedure::fz0_n(110).unwrap()).abs() < 1e-12, "{x} → {y}");
+    }
+    let e = expand(&load(&dir().join("gs2mf_freerolling.toml")).unwrap(), &RunInputs { fz0_n: Some(-5.0), ..RunInputs::default() })
+        .unwrap_err()
+        .to_string();
+    assert!(e.contains("fz0_n"), "{e}");
+}

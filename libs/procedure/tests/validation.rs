@@ -178,3 +178,33 @@ file = "b.toml"
     let e = parse_with("a.toml", &c, &mut read).unwrap_err();
     assert!(e.to_string().contains("nope.toml"), "{e}");
 }
+
+#[test]
+fn absolute_section_pressures_are_checked() {
+    let both = GOOD.replace("pressure = \"mid\"", "pressure = \"mid\"\npressures_bar = [0.7, 0.84]");
+    let (_, key, msg) = err(&both);
+    assert_eq!(key, "pressures_bar");
+    assert!(msg.contains("not both"), "{msg}");
+    let negative = GOOD.replace("pressure = \"mid\"", "pressures_bar = [0.7, -0.84]");
+    let (line, key, msg) = err(&negative);
+    assert_eq!((key.as_str(), line), ("pressures_bar", line_of(&negative, "pressures_bar")));
+    assert!(msg.contains("-0.84"), "{msg}");
+    let empty = GOOD.replace("pressure = \"mid\"", "pressures_bar = []");
+    assert_eq!(err(&empty).1, "pressures_bar");
+    parse_file("t.toml", &GOOD.replace("pressure = \"mid\"", "pressure_bar = 0.84")).unwrap();
+}
+
+#[test]
+fn standstill_takes_a_hold_time_and_a_load_only() {
+    let st = GOOD.replace(
+        "kind = \"sweep\"\npeak_deg = 16.0\nlow_rate_dps = 2.0\nhigh_rate_dps = 30.0\nthreshold_deg = 4.0\nasym = \"medium\"",
+        "kind = \"standstill\"\nhold_s = 5.0\nload = 0.6",
+    );
+    parse_file("t.toml", &st).unwrap();
+    let (_, key, msg) = err(&st.replace("hold_s = 5.0\n", ""));
+    assert_eq!(key, "hold_s");
+    assert!(msg.contains("missing"), "{msg}");
+    let (_, key, msg) = err(&st.replace("load = 0.6", "load = 0.6\nspeed_mps = 3.0"));
+    assert_eq!(key, "speed_mps");
+    assert!(msg.contains("not used by kind"), "{msg}");
+}

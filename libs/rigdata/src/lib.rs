@@ -38,6 +38,7 @@ pub mod sweeps;
 pub mod table;
 pub mod tydex;
 pub mod units;
+pub mod virtual_export;
 
 pub use error::{Place, ReadError, Warning};
 pub use import::{Import, ReadOptions, read_path};

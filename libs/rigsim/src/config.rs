@@ -315,10 +315,23 @@ impl Default for RigSection {
     }
 }
 
-/// The tyre specimen: tread and load rating.
+/// Which tyre model `tyre_file` holds.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, Default)]
+#[serde(rename_all = "snake_case")]
+pub enum TyreModel {
+    /// An MF-Tyre 6.1 property file (`.tir`).
+    #[default]
+    Mf61,
+    /// A physical brush tyre's parameter file (TOML; `crate::brush`, `docs/brush-tyre.md`).
+    Brush,
+}
+
+/// The tyre specimen: model, tread and load rating.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields, default)]
 pub struct TyreSection {
+    /// What `tyre_file` is: `"mf61"` (default) or `"brush"`.
+    pub model: TyreModel,
     /// Tread depth of a new tyre [mm] (thesis tyre: 5.6 mm).
     pub new_tread_depth_mm: f64,
     /// Tread depth at the start of the run [mm].
@@ -337,6 +350,7 @@ pub struct TyreSection {
 impl Default for TyreSection {
     fn default() -> Self {
         Self {
+            model: TyreModel::Mf61,
             new_tread_depth_mm: 5.6,
             initial_tread_depth_mm: 5.6,
             legal_min_tread_depth_mm: 1.6,
@@ -662,7 +676,8 @@ impl Default for RimSlipParams {
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct RigConfig {
-    /// MF-Tyre 6.1 property file, relative to the config file (or absolute).
+    /// The tyre's file, relative to the config file (or absolute): an MF-Tyre 6.1 `.tir`, or a
+    /// brush-tyre TOML file when `[tyre] model = "brush"`.
     pub tyre_file: PathBuf,
     /// Seed of the noise generator (ChaCha8); the same config and seed give identical samples.
     #[serde(default)]

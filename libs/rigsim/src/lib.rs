@@ -54,18 +54,22 @@
 //! microsecond (`cargo bench -p rigsim --bench step`). Publishing at 1 kHz evaluates the model
 //! every step.
 
+pub mod brush;
 pub mod calibration;
 mod config;
 mod noise;
 mod rig;
 mod thermal;
+mod tyre;
 
+pub use brush::{BrushError, BrushInput, BrushParams};
 pub use config::{
     BreakInParams, ChatterParams, ConfigError, DEFAULT_TYRE_FILE, Effects, EnvironmentSection, NoiseParams, RigConfig,
-    RigLimits, RigProfile, RigSection, RimSlipParams, ThermalGripParams, ThermalParams, TransientParams, TyreSection,
-    UnknownEffect, WearParams, load_capacity_kg, nominal_load_n,
+    RigLimits, RigProfile, RigSection, RimSlipParams, ThermalGripParams, ThermalParams, TransientParams, TyreModel,
+    TyreSection, UnknownEffect, WearParams, load_capacity_kg, nominal_load_n,
 };
 pub use rig::{RigError, SetpointRefusal, TruthState, VirtualRig};
+pub use tyre::VirtualTyre;
 
 /// Re-exported so users of the core need not depend on `tyre_msgs` / `mftyre` for the basics.
 pub use mftyre::TyreParams;

@@ -2,13 +2,14 @@
 
 use std::path::Path;
 
-use mftyre::{MfInput, MfOutput, ScalingFactors, TyreParams, UseMode};
+use mftyre::{MfOutput, ScalingFactors, TyreParams};
 use tyre_msgs::msg::{RigSample, RigSetpoint};
 use tyre_msgs::std_msgs::Header;
 
 use crate::config::{ConfigError, Effects, RigConfig, RigLimits, nominal_load_n};
 use crate::noise::Gauss;
 use crate::thermal::{ThermalInput, ThermalState};
+use crate::tyre::{TyreScaling, TyreState, VirtualTyre};
 
 /// Errors building a virtual rig.
 #[derive(Debug, thiserror::Error)]
@@ -25,6 +26,9 @@ pub enum RigError {
         #[source]
         source: mftyre::TirError,
     },
+    /// The brush-tyre parameter file is unreadable or invalid.
+    #[error(transparent)]
+    Brush(#[from] crate::brush::BrushError),
     /// The config does not validate (when built from a value rather than a file).
     #[error("invalid `{key}`: {reason}")]
     Invalid {
@@ -222,7 +226,7 @@ struct ModelOut {
 #[derive(Debug, Clone)]
 pub struct VirtualRig {
     cfg: RigConfig,
-    params: TyreParams,
+    tyre: VirtualTyre,
     base_scaling: ScalingFactors,
     limits: RigLimits,
     effects: Effects,
@@ -277,11 +281,13 @@ pub struct VirtualRig {
 impl VirtualRig {
     /// A rig at rest (belt stopped, load off, safe mode) with the tyre at
     /// `environment.initial_tyre_temp_c`. `seed` overrides `cfg.seed` for the noise stream.
-    pub fn new(cfg: RigConfig, params: TyreParams, seed: u64) -> Result<VirtualRig, RigError> {
+    /// `tyre`: MF parameters ([`TyreParams`]) or any [`VirtualTyre`].
+    pub fn new(cfg: RigConfig, tyre: impl Into<VirtualTyre>, seed: u64) -> Result<VirtualRig, RigError> {
+        let tyre: VirtualTyre = tyre.into();
         cfg.validate().map_err(|(key, reason)| RigError::Invalid { key, reason })?;
-        let fz0_n = params.fnomin_n();
-        let r0 = params.unloaded_radius_m();
-        let p0 = params.nominal_pressure_pa();
+        let fz0_n = tyre.fnomin_n();
+        let r0 = tyre.unloaded_radius_m();
+        let p0 = tyre.nominal_pressure_pa();
         if !(fz0_n.is_finite() && fz0_n > 0.0 && r0.is_finite() && r0 > 0.0 && p0.is_finite() && p0 > 0.0) {
             return Err(RigError::TyreValues(format!(
                 "FNOMIN {fz0_n}, UNLOADED_RADIUS {r0}, NOMPRES {p0} must be > 0"
@@ -290,13 +296,17 @@ impl VirtualRig {
         let limits = cfg.limits();
         // The rating entered at the rig caps the load, not the tyre file's FNOMIN: a wrong index
         // lets the rig overload the tyre exactly as in the thesis's failure case.
-        let rated_fz0 = nominal_load_n(cfg.tyre.load_index).unwrap_or(fz0_n);
+        // A brush tyre carries its own rating (race tyres have no ETRTO index).
+        let rated_fz0 = match &tyre {
+            VirtualTyre::Brush(_) => fz0_n,
+            VirtualTyre::Mf(_) => nominal_load_n(cfg.tyre.load_index).unwrap_or(fz0_n),
+        };
         let max_load_n = limits.max_load_n.min(cfg.tyre.max_load_factor * rated_fz0);
         let internal = u64::from(cfg.internal_rate_hz);
         let t0 = cfg.environment.initial_tyre_temp_c;
         let break_in_deficit = if cfg.effects.break_in { cfg.break_in.initial_grip_deficit } else { 0.0 };
         let mut rig = VirtualRig {
-            base_scaling: params.scaling,
+            base_scaling: tyre.base_scaling(),
             effects: cfg.effects,
             fz0_n,
             max_load_n,
@@ -345,15 +355,15 @@ impl VirtualRig {
             break_in_deficit,
             model: ModelOut::default(),
             limits,
-            params,
+            tyre,
             cfg,
         };
         rig.update_model(0.0);
         Ok(rig)
     }
 
-    /// Reads `path` (a `virtual_rig.toml`), its tyre file, and builds the rig with the config's
-    /// seed.
+    /// Reads `path` (a `virtual_rig.toml`), its tyre file (`.tir` or brush file, per
+    /// `[tyre] model`), and builds the rig with the config's seed.
     pub fn from_config_file(path: &Path) -> Result<VirtualRig, RigError> {
         let cfg = RigConfig::load(path)?;
         VirtualRig::from_config(cfg)
@@ -361,10 +371,9 @@ impl VirtualRig {
 
     /// Builds the rig from a loaded config (tyre file path already resolved), with its seed.
     pub fn from_config(cfg: RigConfig) -> Result<VirtualRig, RigError> {
-        let params = TyreParams::read_tir(&cfg.tyre_file)
-            .map_err(|source| RigError::Tyre { path: cfg.tyre_file.display().to_string(), source })?;
+        let tyre = VirtualTyre::load(&cfg)?;
         let seed = cfg.seed;
-        VirtualRig::new(cfg, params, seed)
+        VirtualRig::new(cfg, tyre, seed)
     }
 
     /// The configuration in use.
@@ -373,8 +382,13 @@ impl VirtualRig {
     }
 
     /// The tyre model parameters in use.
-    pub fn params(&self) -> &TyreParams {
-        &self.params
+    pub fn params(&self) -> Option<&TyreParams> {
+        self.tyre.mf_params()
+    }
+
+    /// The tyre in use (MF or brush).
+    pub fn tyre(&self) -> &VirtualTyre {
+        &self.tyre
     }
 
     /// The effects in use.
@@ -673,13 +687,7 @@ impl VirtualRig {
         self.grip_factor = g_t * (1.0 - self.break_in_deficit);
         self.stiffness_factor = k_t * (1.0 + wear.stiffness_gain_per_mm * worn);
         let shape = 1.0 + wear.shape_gain_per_mm * worn;
-        let mut s = self.base_scaling;
-        s.lmux *= self.grip_factor;
-        s.lmuy *= self.grip_factor;
-        s.lkx *= self.stiffness_factor;
-        s.lky *= self.stiffness_factor;
-        s.lcx *= shape;
-        s.lcy *= shape;
+        let scaling = TyreScaling { grip: self.grip_factor, stiffness: self.stiffness_factor, shape };
 
         self.sigma_load_scale =
             (self.fz_n.max(0.0) / self.fz0_n).powf(self.cfg.transient.load_exponent).clamp(0.2, 2.0);
@@ -687,26 +695,25 @@ impl VirtualRig {
         let re_prev = if self.model.valid && self.model.mf.re_m > 0.0 {
             self.model.mf.re_m
         } else {
-            self.params.unloaded_radius_m()
+            self.tyre.unloaded_radius_m()
         };
-        let input = MfInput {
+        let state = TyreState {
             fz_n: self.fz_n.max(0.0),
             kappa,
             alpha_rad: self.alpha_relaxed_deg.to_radians(),
             gamma_rad: self.camber_deg.to_radians(),
-            phit_per_m: 0.0,
             vx_mps: vx,
             p_pa: self.pressure_pa,
             omega_radps: if vx > 0.0 { vx * (1.0 + kappa) / re_prev } else { 0.0 },
         };
-        let mf = mftyre::evaluate_scaled(&self.params, &s, UseMode::M111, &input);
+        let mf = self.tyre.evaluate(&self.base_scaling, scaling, &state);
         let finite = [mf.fx_n, mf.fy_n, mf.mx_nm, mf.my_nm, mf.mz_nm, mf.rl_m, mf.re_m].iter().all(|v| v.is_finite());
         let mut fx = mf.fx_n;
         if statik {
             // Locked wheel, belt moved: the carcass acts as a spring up to the friction limit;
             // a belt displacement along its running direction drags the patch rearwards.
             let cx = if mf.cx_npm.is_finite() && mf.cx_npm > 0.0 { mf.cx_npm } else { 4.0e5 };
-            let limit = self.params.get("PDX1").unwrap_or(1.0).abs() * self.grip_factor * self.fz_n.max(0.0);
+            let limit = self.tyre.static_friction(&mf, self.grip_factor) * self.fz_n.max(0.0);
             let max_elastic = limit / cx;
             self.static_elastic_m = self.static_elastic_m.clamp(-max_elastic, max_elastic);
             fx = -cx * self.static_elastic_m;
@@ -813,7 +820,7 @@ impl VirtualRig {
             self.speed_mps + v_noise
         };
         let worn_m = if self.effects.wear { self.tread_worn_mm * 1e-3 } else { 0.0 };
-        let rl = if m.valid { m.mf.rl_m - worn_m } else { self.params.unloaded_radius_m() - worn_m };
+        let rl = if m.valid { m.mf.rl_m - worn_m } else { self.tyre.unloaded_radius_m() - worn_m };
         // DSTWOWHC at the rig's 0.1 mm resolution.
         let dst = ((rl + r_noise) / 1e-4).round() * 1e-4;
         let re = if m.valid && m.mf.re_m > 0.0 { m.mf.re_m - worn_m } else { rl };

@@ -115,7 +115,7 @@ fn mf_at(params: &TyreParams, s: &RigSample) -> mftyre::MfOutput {
 #[test]
 fn with_every_effect_off_samples_are_the_steady_state_model() {
     let mut rig = rig_with(Effects::NONE, 5);
-    let p = rig.params().clone();
+    let p = rig.params().expect("MF tyre").clone();
     let samples = programme(&mut rig);
     let mut checked = 0;
     for s in samples.iter().filter(|s| s.trajvelw_mps > 2.0 && s.fzw_n > 100.0) {
@@ -140,7 +140,7 @@ fn with_every_effect_off_samples_are_the_steady_state_model() {
 #[test]
 fn with_only_noise_on_samples_are_the_model_plus_configured_noise() {
     let mut rig = rig_with(Effects::parse("noise").unwrap(), 9);
-    let p = rig.params().clone();
+    let p = rig.params().expect("MF tyre").clone();
     let n = rig.config().noise.clone();
     let samples = programme(&mut rig);
     // The slip channels are noisy too, so compare in a window where the model is nearly linear

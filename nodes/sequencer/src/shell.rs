@@ -22,6 +22,10 @@ pub struct SequencerNodeConfig {
     /// ETRTO load index of the tyre on the rig.
     #[serde(default = "default_li")]
     pub load_index: u32,
+    /// The tyre's nominal load Fz0 [N] when it has no ETRTO index (race tyres); replaces the
+    /// load index's.
+    #[serde(default)]
+    pub fz0_n: Option<f64>,
     /// Low, middle, high inflation pressure [bar].
     #[serde(default = "default_pressures")]
     pub pressures_bar: [f64; 3],
@@ -90,6 +94,7 @@ pub async fn run(mut node: RosNode, cfg: SequencerNodeConfig, shutdown: Shutdown
     let doc = procedure::load(&cfg.procedure).map_err(|e| SequencerNodeError::Procedure(e.to_string()))?;
     let inputs = RunInputs {
         load_index: cfg.load_index,
+        fz0_n: cfg.fz0_n,
         pressures_bar: cfg.pressures_bar,
         nominal_speed_mps: cfg.nominal_speed_mps,
         sweeps: cfg.sweeps,

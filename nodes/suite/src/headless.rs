@@ -13,7 +13,8 @@ use crate::{
 use mcaplog::LogWriteError;
 use monitor::{MonitorConfig, TyreInfo, pipeline::Pipeline};
 use procedure::Plan;
-use rigsim::{RigConfig, TyreParams, VirtualRig};
+use procedure::RunInputs;
+use rigsim::{RigConfig, VirtualRig, VirtualTyre};
 use sequencer::{Sequencer, SequencerConfig, SequencerEvent};
 use std::collections::BTreeMap;
 use thermal::{ThermalConfig, ThermalGate};
@@ -44,7 +45,9 @@ pub enum HeadlessError {
 pub struct Headless {
     rig: VirtualRig,
     rig_cfg: RigConfig,
-    params: TyreParams,
+    tyre: VirtualTyre,
+    /// The run inputs the plan was expanded with (the spec's, or the brush tyre's ratings).
+    inputs: RunInputs,
     gate: ThermalGate,
     seq: Sequencer,
     seed: u64,
@@ -64,8 +67,9 @@ impl std::fmt::Debug for Headless {
     }
 }
 
-/// Loads the rig config of `spec` with its overrides (tyre, effects, wear multiplier).
-pub fn rig_config(spec: &RunSpec) -> Result<(RigConfig, TyreParams), HeadlessError> {
+/// Loads the rig config of `spec` with its overrides (tyre, effects, wear multiplier) and the
+/// tyre it names (MF `.tir` or brush file, per the config's `[tyre] model`).
+pub fn rig_config(spec: &RunSpec) -> Result<(RigConfig, VirtualTyre), HeadlessError> {
     let mut cfg = RigConfig::load(&spec.rig_config).map_err(|e| HeadlessError::RigConfig(e.to_string()))?;
     if let Some(t) = &spec.tyre {
         cfg.tyre_file = t.clone();
@@ -79,46 +83,85 @@ pub fn rig_config(spec: &RunSpec) -> Result<(RigConfig, TyreParams), HeadlessErr
     // The rig's load envelope follows the rating the operator entered, as on a real rig: a wrong
     // entry loads the tyre too hard, and the monitor has to catch it from the data.
     cfg.tyre.load_index = spec.inputs.load_index;
-    let params = TyreParams::read_tir(&cfg.tyre_file)
+    let tyre = VirtualTyre::load(&cfg)
         .map_err(|e| HeadlessError::Tyre { path: cfg.tyre_file.display().to_string(), detail: e.to_string() })?;
-    Ok((cfg, params))
+    Ok((cfg, tyre))
+}
+
+/// The run inputs for `spec` on `tyre`: the spec's, except that a brush tyre (with
+/// `use_tyre_ratings`) brings its own nominal load (its load index when it has one, else Fz0
+/// directly) and test pressures; the plan's pressure envelope is the rig's.
+pub fn run_inputs(spec: &RunSpec, cfg: &RigConfig, tyre: &VirtualTyre) -> RunInputs {
+    let mut inputs = spec.inputs;
+    if let (Some(b), true) = (tyre.brush_params(), spec.use_tyre_ratings) {
+        match b.load_index {
+            Some(li) => inputs.load_index = li,
+            None => inputs.fz0_n = Some(b.nominal.load_n),
+        }
+        inputs.pressures_bar = b.nominal.test_pressures_bar;
+    }
+    let rig = cfg.limits();
+    inputs.limits.min_pressure_bar = rig.min_pressure_pa / procedure::setpoint::PA_PER_BAR;
+    inputs.limits.max_pressure_bar = rig.max_pressure_pa / procedure::setpoint::PA_PER_BAR;
+    inputs
 }
 
 /// The ETRTO load index a tyre declares, from its nominal load: the index whose
 /// Fz0 = 0.65 × capacity × 9.81 is nearest FNOMIN (the thesis's tyre: 6,752 N → 110).
-pub fn declared_load_index(params: &TyreParams) -> u32 {
-    let fnomin = params.fnomin_n();
+pub fn declared_load_index(tyre: &VirtualTyre) -> u32 {
+    if let Some(li) = tyre.brush_params().and_then(|b| b.load_index) {
+        return li;
+    }
+    let fnomin = tyre.fnomin_n();
     (60..=130)
         .filter_map(|li| procedure::fz0_n(li).ok().map(|fz0| (li, (fz0 - fnomin).abs())))
         .min_by(|a, b| a.1.total_cmp(&b.1))
         .map_or(110, |(li, _)| li)
 }
 
-/// Loads and expands the procedure of `spec`.
-pub fn plan(spec: &RunSpec) -> Result<Plan, HeadlessError> {
+/// Loads and expands the procedure of `spec` with `inputs` ([`run_inputs`]).
+pub fn plan(spec: &RunSpec, inputs: &RunInputs) -> Result<Plan, HeadlessError> {
     let doc = procedure::load(&spec.procedure_file).map_err(|e| HeadlessError::Procedure(e.to_string()))?;
-    procedure::expand(&doc, &spec.inputs).map_err(|e| HeadlessError::Procedure(e.to_string()))
+    procedure::expand(&doc, inputs).map_err(|e| HeadlessError::Procedure(e.to_string()))
+}
+
+/// The monitor's view of the tyre: its own rating (sidewall), whatever the operator entered.
+fn tyre_info(cfg: &RigConfig, tyre: &VirtualTyre) -> Result<TyreInfo, HeadlessError> {
+    let li = declared_load_index(tyre);
+    let mut info = TyreInfo::from_load_index(li).map_err(|e| HeadlessError::Procedure(format!("load index: {e}")))?;
+    if tyre.brush_params().is_some() {
+        // A brush tyre states its nominal load (race tyres have no index of their own) and tread.
+        info.fz0_n = tyre.fnomin_n();
+        info.tread_new_mm = cfg.tyre.new_tread_depth_mm;
+        info.tread_min_mm = cfg.tyre.legal_min_tread_depth_mm;
+    }
+    Ok(info)
 }
 
 impl Headless {
     /// Builds the cores for `spec`.
     pub fn new(spec: &RunSpec, thermal_cfg: ThermalConfig, seq_cfg: SequencerConfig) -> Result<Self, HeadlessError> {
-        let (rig_cfg, params) = rig_config(spec)?;
-        let plan = plan(spec)?;
-        let rig = VirtualRig::new(rig_cfg.clone(), params.clone(), spec.seed)
+        let (rig_cfg, tyre) = rig_config(spec)?;
+        let inputs = run_inputs(spec, &rig_cfg, &tyre);
+        let plan = plan(spec, &inputs)?;
+        let rig = VirtualRig::new(rig_cfg.clone(), tyre.clone(), spec.seed)
             .map_err(|e| HeadlessError::RigConfig(e.to_string()))?;
         let gate = ThermalGate::new(thermal_cfg).map_err(|e| HeadlessError::Thermal(e.to_string()))?;
+        let mut seq_cfg = seq_cfg;
+        // The sequencer guards the same machine as the rig: its pressure envelope is the rig's.
+        seq_cfg.envelope.min_pressure_bar = inputs.limits.min_pressure_bar;
+        seq_cfg.envelope.max_pressure_bar = inputs.limits.max_pressure_bar;
         let seq = Sequencer::new(plan, seq_cfg).map_err(|e| HeadlessError::Sequencer(e.to_string()))?;
         // The monitor judges the data against the tyre's own (sidewall) rating, which the
         // operator's entry may contradict: it is not told the entry, it has to see it in the loads.
-        let tyre_info = TyreInfo::from_load_index(declared_load_index(&params))
-            .map_err(|e| HeadlessError::Procedure(format!("load index: {e}")))?;
+        let tyre_info = tyre_info(&rig_cfg, &tyre)?;
         let pipeline = Pipeline::new(channels::ChannelsConfig::default(), MonitorConfig::default(), tyre_info)
             .map_err(|e| HeadlessError::Procedure(format!("monitor: {e}")))?;
         Ok(Self {
             rig,
             rig_cfg,
-            params,
+            tyre,
+            inputs,
             gate,
             seq,
             seed: spec.seed,
@@ -140,16 +183,23 @@ impl Headless {
         let mut md = BTreeMap::new();
         let mut tyre = BTreeMap::new();
         tyre.insert("file".to_owned(), self.rig_cfg.tyre_file.display().to_string());
-        tyre.insert("fnomin_n".to_owned(), format!("{}", self.params.fnomin_n()));
-        tyre.insert("unloaded_radius_m".to_owned(), format!("{}", self.params.unloaded_radius_m()));
-        tyre.insert("load_index".to_owned(), spec.inputs.load_index.to_string());
+        tyre.insert("fnomin_n".to_owned(), format!("{}", self.tyre.fnomin_n()));
+        tyre.insert("unloaded_radius_m".to_owned(), format!("{}", self.tyre.unloaded_radius_m()));
+        tyre.insert("load_index".to_owned(), self.inputs.load_index.to_string());
+        if let Some(b) = self.tyre.brush_params() {
+            tyre.insert("model".to_owned(), "brush".to_owned());
+            tyre.insert("name".to_owned(), b.name.clone());
+            tyre.insert("rim_width_in".to_owned(), format!("{}", b.dimensions.rim_width_in));
+            tyre.insert("width_m".to_owned(), format!("{}", b.dimensions.width_m));
+        }
         md.insert("tyre".to_owned(), tyre);
         let mut proc_ = BTreeMap::new();
         proc_.insert("name".to_owned(), self.seq.plan().procedure.clone());
+        proc_.insert("title".to_owned(), self.seq.plan().title.clone());
         proc_.insert("file".to_owned(), spec.procedure_file.display().to_string());
         proc_.insert("fz0_n".to_owned(), format!("{}", self.seq.plan().fz0_n));
-        proc_.insert("pressures_bar".to_owned(), format!("{:?}", spec.inputs.pressures_bar));
-        proc_.insert("nominal_speed_mps".to_owned(), format!("{}", spec.inputs.nominal_speed_mps));
+        proc_.insert("pressures_bar".to_owned(), format!("{:?}", self.inputs.pressures_bar));
+        proc_.insert("nominal_speed_mps".to_owned(), format!("{}", self.inputs.nominal_speed_mps));
         proc_.insert("sweeps".to_owned(), format!("{:?}", spec.inputs.sweeps).to_lowercase());
         md.insert("procedure".to_owned(), proc_);
         let mut rig = BTreeMap::new();
@@ -157,6 +207,9 @@ impl Headless {
         rig.insert("effects".to_owned(), self.rig_cfg.effects.to_string());
         rig.insert("seed".to_owned(), self.seed.to_string());
         rig.insert("publish_rate_hz".to_owned(), self.rig_cfg.publish_rate_hz.to_string());
+        rig.insert("config".to_owned(), spec.rig_config.display().to_string());
+        rig.insert("ambient_temp_c".to_owned(), format!("{}", self.rig_cfg.environment.ambient_temp_c));
+        rig.insert("belt_temp_c".to_owned(), format!("{}", self.rig_cfg.environment.belt_temp_c));
         md.insert("rig".to_owned(), rig);
         let mut sw = BTreeMap::new();
         sw.insert("software".to_owned(), "tyrerig".to_owned());
@@ -187,7 +240,7 @@ impl Headless {
         self.time_offset_s += self.rig.time_s();
         self.seq_offset = last_seq + 1;
         let seed = self.seed.wrapping_add(self.wear_true.len() as u64);
-        self.rig = VirtualRig::new(self.rig_cfg.clone(), self.params.clone(), seed)
+        self.rig = VirtualRig::new(self.rig_cfg.clone(), self.tyre.clone(), seed)
             .map_err(|e| HeadlessError::RigConfig(e.to_string()))?;
         Ok(())
     }

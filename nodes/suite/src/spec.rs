@@ -67,6 +67,10 @@ pub struct RunSpec {
     pub seed: u64,
     /// Load index, pressures, speed, sweep style, rig limits.
     pub inputs: RunInputs,
+    /// For a brush tyre, take the nominal load (or its load index) and the three test
+    /// pressures from its parameter file instead of `inputs` (a race tyre has no ETRTO index).
+    /// Off when the operator gives the load index or pressures explicitly.
+    pub use_tyre_ratings: bool,
     /// Stop after this much rig time even if the procedure is not complete (a safety net).
     pub max_rig_time_s: f64,
 }
@@ -82,6 +86,7 @@ impl RunSpec {
             wear_multiplier: None,
             seed: 1,
             inputs: RunInputs { sweeps: SweepStyle::Variable, ..RunInputs::default() },
+            use_tyre_ratings: true,
             max_rig_time_s: 200_000.0,
         }
     }

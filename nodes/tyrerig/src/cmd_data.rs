@@ -17,6 +17,8 @@ pub enum ExportCmd {
     Tydex(ExportTydexArgs),
     /// Write a measured file's channels (.dat, .mat, .tdx) as a MATLAB .mat file (TTC layout)
     Mat(ExportMatArgs),
+    /// Write a virtual rig run as a Calspan TIRF / TTC-style .dat with every quirk of real files
+    Ttc(crate::cmd_export_ttc::ExportTtcArgs),
 }
 
 /// Arguments of `tyrerig export tydex`.
@@ -147,6 +149,7 @@ pub fn run_export(cmd: ExportCmd) -> Result<()> {
             eprintln!("wrote {} ({} channels, {} rows)", a.out.display(), table.columns.len(), table.rows());
             Ok(())
         }
+        ExportCmd::Ttc(a) => crate::cmd_export_ttc::run(a),
     }
 }
 

@@ -5,18 +5,24 @@ use procedure::SweepStyle;
 use std::path::PathBuf;
 use suite::{Headless, McapSink, ProcedureChoice, RunSpec};
 
-/// `tyrerig run [--procedure …] [--tyre …] [--load-index N] [--effects …] [--seed N] [--sweeps …] --out <log.mcap>`
+/// `tyrerig run [--procedure …] [--rig-config …] [--tyre …] [--load-index N] [--effects …] [--seed N] [--sweeps …] --out <log.mcap>`
 #[derive(Debug, clap::Args)]
 pub struct RunArgs {
-    /// gs2mf | freerolling | brkdrv | staticlong | square-matrix
-    #[arg(long, default_value = "gs2mf", value_parser = ProcedureChoice::parse)]
-    pub procedure: ProcedureChoice,
-    /// MF-Tyre 6.1 .tir file of the virtual tyre (default: the rig config's).
+    /// gs2mf | freerolling | brkdrv | staticlong | square-matrix, or a procedure file
+    #[arg(long, default_value = "gs2mf", value_parser = ProcedureArg::parse)]
+    pub procedure: ProcedureArg,
+    /// The virtual rig's config (default: <launch-config>/virtual_rig.toml); e.g.
+    /// launch-config/virtual_rig_brush_race.toml for the brush race tyre.
+    #[arg(long)]
+    pub rig_config: Option<PathBuf>,
+    /// The virtual tyre's file, replacing the rig config's (a .tir, or a brush file when the
+    /// config's tyre model is brush).
     #[arg(long)]
     pub tyre: Option<PathBuf>,
-    /// ETRTO load index entered for the tyre (drives the loads; the thesis's tyre is 110).
-    #[arg(long, default_value_t = 110)]
-    pub load_index: u32,
+    /// ETRTO load index entered for the tyre (drives the loads; default 110, the thesis's tyre;
+    /// a brush tyre brings its own rating and test pressures unless this is given).
+    #[arg(long)]
+    pub load_index: Option<u32>,
     /// Virtual-rig effects: none | all | comma list of transient, thermal, thermal_grip, wear,
     /// break_in, noise, chatter, rim_slip (default: the rig config's).
     #[arg(long)]
@@ -47,13 +53,52 @@ pub struct RunArgs {
     pub quiet: bool,
 }
 
+/// A procedure by name, or a procedure file.
+#[derive(Debug, Clone)]
+pub enum ProcedureArg {
+    Named(ProcedureChoice),
+    File(PathBuf),
+}
+
+impl ProcedureArg {
+    fn parse(s: &str) -> Result<Self, String> {
+        match ProcedureChoice::parse(s) {
+            Ok(c) => Ok(Self::Named(c)),
+            Err(_) if s.ends_with(".toml") || s.contains('/') => Ok(Self::File(PathBuf::from(s))),
+            Err(e) => Err(format!("{e}, or a procedure file (.toml)")),
+        }
+    }
+
+    fn name(&self) -> String {
+        match self {
+            Self::Named(c) => c.name().to_owned(),
+            Self::File(p) => {
+                p.file_stem().map_or_else(|| p.display().to_string(), |s| s.to_string_lossy().into_owned())
+            }
+        }
+    }
+}
+
 pub fn spec_of(args: &RunArgs) -> RunSpec {
-    let mut spec = RunSpec::new(&args.launch_config, args.procedure);
+    let choice = match &args.procedure {
+        ProcedureArg::Named(c) => *c,
+        ProcedureArg::File(_) => ProcedureChoice::Gs2mf,
+    };
+    let mut spec = RunSpec::new(&args.launch_config, choice);
+    if let ProcedureArg::File(p) = &args.procedure {
+        spec.procedure_file = p.clone();
+    }
+    if let Some(c) = &args.rig_config {
+        spec.rig_config = c.clone();
+    }
     spec.tyre = args.tyre.clone();
     spec.effects = args.effects.clone();
     spec.wear_multiplier = args.wear_multiplier;
     spec.seed = args.seed;
-    spec.inputs.load_index = args.load_index;
+    if let Some(li) = args.load_index {
+        spec.inputs.load_index = li;
+        spec.use_tyre_ratings = false;
+    }
     spec.inputs.sweeps = args.sweeps;
     spec
 }
@@ -148,8 +193,9 @@ fn run_dds(args: &RunArgs) -> anyhow::Result<()> {
     }
     // The monitor judges the loads against the tyre's own rating (as headless runs do), not
     // against the index the operator entered.
-    let (_, params) = suite::headless::rig_config(&spec)?;
-    let declared_index = suite::headless::declared_load_index(&params);
+    let (rig_cfg, tyre) = suite::headless::rig_config(&spec)?;
+    let declared_index = suite::headless::declared_load_index(&tyre);
+    let inputs = suite::headless::run_inputs(&spec, &rig_cfg, &tyre);
 
     let mut rig = vec![
         ("rig_config", path_value(&spec.rig_config)?),
@@ -162,13 +208,23 @@ fn run_dds(args: &RunArgs) -> anyhow::Result<()> {
     if let Some(e) = &spec.effects {
         rig.push(("effects", V::String(e.clone())));
     }
-    let sequencer = vec![
+    let mut sequencer = vec![
         ("procedure", path_value(&spec.procedure_file)?),
-        ("load_index", V::Integer(i64::from(spec.inputs.load_index))),
+        ("load_index", V::Integer(i64::from(inputs.load_index))),
+        ("pressures_bar", V::Array(inputs.pressures_bar.iter().map(|p| V::Float(*p)).collect())),
         ("sweeps", V::String(format!("{:?}", spec.inputs.sweeps).to_lowercase())),
         ("autostart", V::Boolean(true)),
         ("exit_when_done", V::Boolean(true)),
     ];
+    // A brush race tyre: its own Fz0 and the rig's pressure range (down to 0.5 bar).
+    if let Some(f) = inputs.fz0_n {
+        sequencer.push(("fz0_n", V::Float(f)));
+    }
+    let envelope = table(&[
+        ("min_pressure_bar", V::Float(inputs.limits.min_pressure_bar)),
+        ("max_pressure_bar", V::Float(inputs.limits.max_pressure_bar)),
+    ]);
+    sequencer.push(("core", V::Table(table(&[("envelope", V::Table(envelope))]))));
     let md: toml::Table = metadata
         .iter()
         .map(|(k, m)| (k.clone(), V::Table(m.iter().map(|(a, b)| (a.clone(), V::String(b.clone()))).collect())))

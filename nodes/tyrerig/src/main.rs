@@ -10,6 +10,7 @@ use clap::{Parser, Subcommand};
 mod cmd_bench;
 mod cmd_data;
 mod cmd_doctor;
+mod cmd_export_ttc;
 mod cmd_fit;
 mod cmd_launch;
 mod cmd_mcap;
@@ -39,7 +40,7 @@ enum Command {
     Doctor(Box<cmd_doctor::DoctorArgs>),
     /// Fit an MF-Tyre 6.1 model (.tir) to GS2MF logs or measured files, staged as in the thesis
     Fit(Box<cmd_fit::FitArgs>),
-    /// Export log data (TYDEX) or a measured file's channels (MATLAB .mat)
+    /// Export log data (TYDEX, TTC-style .dat) or a measured file's channels (MATLAB .mat)
     #[command(subcommand)]
     Export(cmd_data::ExportCmd),
     /// Import measured rig data (Calspan TTC .dat/.mat, TYDEX .tdx, folders) into an MCAP log the fitter reads

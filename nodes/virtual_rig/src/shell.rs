@@ -2,7 +2,7 @@
 
 use futures::StreamExt;
 use node_runtime::{RosNode, RuntimeError, Shutdown, SuiteTopic};
-use rigsim::{RigConfig, TyreParams, VirtualRig};
+use rigsim::{RigConfig, VirtualRig};
 use serde::Deserialize;
 use std::{path::PathBuf, time::Duration};
 use tyre_msgs::{RigSample, RigSetpoint, rosgraph_msgs::Clock};
@@ -106,10 +106,10 @@ pub fn build_rig(cfg: &VirtualRigNodeConfig) -> Result<VirtualRig, VirtualRigNod
     if let Some(e) = &cfg.effects {
         rc.effects = rigsim::Effects::parse(e).map_err(|e| VirtualRigNodeError::Rig(format!("effects: {e}")))?;
     }
-    let params = TyreParams::read_tir(&rc.tyre_file)
-        .map_err(|e| VirtualRigNodeError::Rig(format!("{}: {e}", rc.tyre_file.display())))?;
+    // An MF .tir or a brush-tyre file, per the rig config's `[tyre] model`.
+    let tyre = rigsim::VirtualTyre::load(&rc).map_err(|e| VirtualRigNodeError::Rig(e.to_string()))?;
     let seed = cfg.seed.unwrap_or(rc.seed);
-    VirtualRig::new(rc, params, seed).map_err(|e| VirtualRigNodeError::Rig(e.to_string()))
+    VirtualRig::new(rc, tyre, seed).map_err(|e| VirtualRigNodeError::Rig(e.to_string()))
 }
 
 /// Runs the rig until shutdown (or `max_sim_time_s`).
