@@ -212,7 +212,7 @@ fn unsteady(x: &[f64], w: usize, tol: impl Fn(f64) -> f64) -> Vec<bool> {
             if c == 0 { f64::NAN } else { (sum[b] - sum[a]) / c as f64 }
         })
         .collect();
-    (0..n)
+    let mut flag: Vec<bool> = (0..n)
         .map(|i| {
             let (a, b) = (i.saturating_sub(w), (i + w + 1).min(n));
             let (mut lo, mut hi) = (f64::INFINITY, f64::NEG_INFINITY);
@@ -224,7 +224,47 @@ fn unsteady(x: &[f64], w: usize, tol: impl Fn(f64) -> f64) -> Vec<bool> {
             }
             hi > lo && hi - lo > tol(smooth[i].abs())
         })
-        .collect()
+        .collect();
+    // The window flags up to `w` rows on each side of a change that are still at the level
+    // before (or already at the level after) it: give back the edge rows whose lightly smoothed
+    // value sits within half the tolerance of the neighbouring held level. Real runs change the
+    // load right as a sweep comes back to zero; without this the sweep's last half second
+    // would be lost to the ramp.
+    let short = (w / 10).max(2);
+    let near = |i: usize| {
+        let (a, b) = (i.saturating_sub(short), (i + short + 1).min(n));
+        let c = cnt[b] - cnt[a];
+        if c == 0 { f64::NAN } else { (sum[b] - sum[a]) / c as f64 }
+    };
+    let mut i = 0;
+    while i < n {
+        if !flag[i] {
+            i += 1;
+            continue;
+        }
+        let (s, mut e) = (i, i);
+        while e < n && flag[e] {
+            e += 1;
+        }
+        i = e;
+        if s > 0 {
+            let level = smooth[s - 1];
+            let mut k = s;
+            while k < e && level.is_finite() && (near(k) - level).abs() <= 0.5 * tol(level.abs()) {
+                flag[k] = false;
+                k += 1;
+            }
+        }
+        if e < n {
+            let level = smooth[e];
+            let mut k = e;
+            while k > s && level.is_finite() && flag[k - 1] && (near(k - 1) - level).abs() <= 0.5 * tol(level.abs()) {
+                flag[k - 1] = false;
+                k -= 1;
+            }
+        }
+    }
+    flag
 }
 
 /// Sweeps of one signal over rows `a..b`: each starts where the signal leaves zero and ends
@@ -286,8 +326,15 @@ fn excursions(x: &[f64], a: usize, b: usize, zero: f64, on: f64, idle: usize) ->
             }
         }
     }
-    if let (Some(s), Some(q)) = (open, quiet_since) {
-        out.push((s, q));
+    if let Some(s) = open {
+        if let Some(q) = quiet_since {
+            out.push((s, q));
+        } else if pos && neg && b > s {
+            // Cut off by the end of the held stretch after it had been to both sides (real runs
+            // change the load or slip angle as a sweep comes back towards zero): the rows are
+            // valid measurements at the held cell, and both sides of the curve are there.
+            out.push((s, b - 1));
+        }
     }
     out
 }
