@@ -118,10 +118,11 @@ pub struct Penalty<'a> {
 }
 
 impl Penalty<'_> {
-    /// Weight for `points` data residuals: a shortfall of 0.01 (in μ, E or G) costs as much as
-    /// raising every data residual by about 3 % of the peak, far more than any fit gains.
+    /// Weight for `points` data residuals: a shortfall of 0.001 (in μ, E or G) costs as much as
+    /// raising every data residual by about 0.3 % of the peak, 0.01 as much as 3 % — more than
+    /// any fit gains by leaving the physical region.
     pub fn weight_for(points: usize) -> f64 {
-        30.0 * (points.max(1) as f64).sqrt()
+        300.0 * (points.max(1) as f64).sqrt()
     }
 }
 
@@ -308,6 +309,43 @@ pub fn bounds_for(key: &str) -> Bounds {
         "FREFF" => (-1.0, 1.0),
         "Q_RE0" => (0.8, 1.2),
         "Q_FZ2" => (0.0, 200.0),
+        // Slip stiffness: Kyα/Fz and Kxκ/Fz of real tyres are a few tens per rad (race tyres up
+        // to ~100).
+        "PKY1" => (-500.0, 500.0),
+        "PKX1" => (0.1, 500.0),
+        // Every other force-and-moment coefficient of MF 6.1 is a dimensionless factor of order
+        // 0.001–50 in published .tir files. Without a bound, a coefficient the data barely
+        // touch (a camber term fitted on a few points) can run off to 10⁵ while its neighbours
+        // compensate: the fit stays plausible in the data and is nonsense beside them.
+        k if is_force_moment_coefficient(k) => (-100.0, 100.0),
         _ => (-INF, INF),
     }
+}
+
+/// True for MF 6.1's force and moment coefficients (`P?X*`, `P?Y*`, `Q?Z*`, `QSX*`, `QSY*`,
+/// `R??*`, `SSZ*`, `PP*`): dimensionless factors, as opposed to stiffnesses and radii.
+fn is_force_moment_coefficient(key: &str) -> bool {
+    let b = key.as_bytes();
+    let digit_tail = b.last().is_some_and(u8::is_ascii_digit);
+    digit_tail
+        && (key.starts_with("PC")
+            || key.starts_with("PD")
+            || key.starts_with("PE")
+            || key.starts_with("PK")
+            || key.starts_with("PH")
+            || key.starts_with("PV")
+            || key.starts_with("PP")
+            || key.starts_with("QB")
+            || key.starts_with("QC")
+            || key.starts_with("QD")
+            || key.starts_with("QE")
+            || key.starts_with("QH")
+            || key.starts_with("QS")
+            || key.starts_with("RB")
+            || key.starts_with("RC")
+            || key.starts_with("RE")
+            || key.starts_with("RH")
+            || key.starts_with("RV")
+            || key.starts_with("SSZ"))
+        && !key.starts_with("PCF")
 }
