@@ -151,7 +151,7 @@ fn label(d: &mut Dataset, ins: &mut Inspection, fraction: f64) {
             let k = match groups.iter_mut().find(|(c, cd, _)| *cd == cond && same_cell(c, &cell)) {
                 Some(g) => {
                     g.2 += 1;
-                    g.clone()
+                    *g
                 }
                 None => {
                     groups.push((cell, cond, 1));
