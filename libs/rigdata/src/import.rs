@@ -343,7 +343,7 @@ fn from_table(
         _ => None,
     };
     if let Some(st) = stated {
-        let id = table.test_id.as_deref().unwrap_or("title");
+        let id = table.test_id.as_deref().or(table.title.as_deref()).unwrap_or_default();
         if st == TestKind::Cornering && n_k > 0 {
             warn.push(
                 "test kind",

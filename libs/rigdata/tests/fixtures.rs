@@ -164,9 +164,10 @@ fn unknown_units_and_test_kind_disagreements_are_named() {
         .unwrap_err()
         .to_string();
     assert!(e.contains("channel FZ: unit `deg` is a unit of angle; FZ needs a unit of force"), "{e}");
-    // A test id that says drive/brake on a cornering run: a warning, the data decides.
+    // A title (a .dat has no testid) that says drive/brake on a cornering run: a warning, the
+    // data decides.
     let mut t = run.table.clone();
-    t.test_id = Some("Drive/Brake/Combined, 12psi".into());
+    t.title = Some("TIRF Data File: Run 7; Drive/Brake/Combined, 12psi".into());
     let (d, r) = import(to_dat(&t, DatLayout::default()).as_bytes(), "k.dat", FileFormat::Dat);
     assert!(d.segments.iter().all(|s| s.cell.unwrap().kind == SweepKind::Cornering));
     assert!(
