@@ -3,7 +3,7 @@
 
 use mffit::engine::{Channel, ChannelProblem, Point};
 use mffit::synth::{self, Noise, SynthOptions};
-use mffit::{DataKind, Dataset, FitOptions, Procedure, fit};
+use mffit::{Dataset, FitOptions, fit};
 use mftyre::{MfInput, TyreParams};
 use nalgebra::DVector;
 

@@ -257,7 +257,7 @@ pub fn ttc_run(spec: &FixtureSpec) -> FixtureRun {
 fn tabulate(spec: &FixtureSpec, rows: &[(f64, State)]) -> ChannelTable {
     let mut nz = Noise(spec.seed.wrapping_mul(0x9E37_79B9_7F4A_7C15) | 1);
     let n = rows.len();
-    let mut c: Vec<Vec<f64>> = vec![Vec::with_capacity(n); 23];
+    let mut c: Vec<Vec<f64>> = (0..23).map(|_| Vec::with_capacity(n)).collect();
     let t_end = rows.last().map(|r| r.0).unwrap_or(1.0).max(1.0);
     for (t, s) in rows {
         let fz = s.fz_n + nz.normal(8.0);

@@ -151,7 +151,7 @@ fn label(d: &mut Dataset, ins: &mut Inspection, fraction: f64) {
             let k = match groups.iter_mut().find(|(c, cd, _)| *cd == cond && same_cell(c, &cell)) {
                 Some(g) => {
                     g.2 += 1;
-                    g.clone()
+                    *g
                 }
                 None => {
                     groups.push((cell, cond, 1));
@@ -343,7 +343,7 @@ fn from_table(
         _ => None,
     };
     if let Some(st) = stated {
-        let id = table.test_id.as_deref().unwrap_or("title");
+        let id = table.test_id.as_deref().or(table.title.as_deref()).unwrap_or_default();
         if st == TestKind::Cornering && n_k > 0 {
             warn.push(
                 "test kind",

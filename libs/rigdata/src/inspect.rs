@@ -155,13 +155,13 @@ impl FileReport {
             let _ = writeln!(s, "title       {t}");
         }
         let _ = writeln!(s, "tyre        {}", opt(&self.tire_id));
-        let _ = writeln!(
-            s,
-            "test        stated: {} ({}); found in the data: {}",
-            opt(&self.test_id),
-            opt(&self.test_kind_stated),
-            self.test_kind_found
-        );
+        let stated = match (&self.test_id, &self.test_kind_stated) {
+            (Some(id), Some(k)) => format!("`{id}` ({k})"),
+            (Some(id), None) => format!("`{id}` (kind not recognised)"),
+            (None, Some(k)) => format!("{k} (from the title)"),
+            (None, None) => "-".into(),
+        };
+        let _ = writeln!(s, "test        stated: {stated}; found in the data: {}", self.test_kind_found);
         let _ = writeln!(s, "axes        {} ({}), converted to ISO-W", self.convention, self.convention_basis);
         let _ = writeln!(s, "slip ratio  {}", self.slip_ratio_from);
         let _ = writeln!(s, "rows        {} at {:.1} Hz", self.rows, self.sample_rate_hz);

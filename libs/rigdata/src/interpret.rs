@@ -289,7 +289,7 @@ pub fn interpret(
                     "unit",
                     place,
                     format!(
-                        "unit `{unit_text}` is a {} unit, expected {}: channel not used",
+                        "unit `{unit_text}` is a unit of {}, expected one of {}: channel not used",
                         u.quantity.name(),
                         role.quantity().name()
                     ),
@@ -306,7 +306,7 @@ pub fn interpret(
                 return Err(ReadError::at(
                     place,
                     format!(
-                        "unit `{unit_text}` is a {} unit; {} needs a {} unit",
+                        "unit `{unit_text}` is a unit of {}; {} needs a unit of {}",
                         u.quantity.name(),
                         c.name,
                         role.quantity().name()
@@ -336,6 +336,15 @@ pub fn interpret(
         };
         let _ = guessed;
         units_of.push((role, unit));
+        if role == Role::SlipRatioEffective && col(Role::SlipRatio).is_some() {
+            uses.push(ChannelUse {
+                name: c.name.clone(),
+                unit_written: c.unit.clone(),
+                unit_read: unit_text,
+                used_as: "not used (SL is the slip ratio)".into(),
+            });
+            continue;
+        }
         uses.push(ChannelUse {
             name: c.name.clone(),
             unit_written: c.unit.clone(),

@@ -339,6 +339,9 @@ fn excursions(x: &[f64], a: usize, b: usize, zero: f64, on: f64, idle: usize) ->
     out
 }
 
+/// A held quantity, the reason its rows are excluded when it moves, and its tolerance.
+type HeldCheck<'a> = (&'a [f64], Exclusion, Box<dyn Fn(f64) -> f64 + 'a>);
+
 /// Finds the sweeps of a run. `test` is what the file says its test is, if it says.
 pub fn find_sweeps(
     sig: &Signals,
@@ -380,7 +383,7 @@ pub fn find_sweeps(
             None
         };
     }
-    let held: [(&[f64], Exclusion, Box<dyn Fn(f64) -> f64>); 4] = [
+    let held: [HeldCheck; 4] = [
         (&sig.fz_n, Exclusion::LoadRamp, Box::new(|l| (opt.fz_tol_fraction * l).max(opt.fz_tol_n))),
         (&sig.p_pa, Exclusion::PressureRamp, Box::new(|l| (0.03 * l).max(opt.p_tol_pa))),
         (&sig.gamma_rad, Exclusion::CamberChange, Box::new(|_| opt.gamma_tol_rad)),
@@ -449,18 +452,14 @@ pub fn find_sweeps(
                 for (f, l) in excursions(&sa_deg, pa, pb, opt.sa_zero_deg, opt.sa_on_deg, idle) {
                     raw.push((true, f, l));
                 }
-                for r in pa..pb {
-                    why[r] = Some(Exclusion::SlipAngleChange);
-                }
+                why[pa..pb].iter_mut().for_each(|w| *w = Some(Exclusion::SlipAngleChange));
             } else {
                 if look_for_kappa {
                     for (f, l) in excursions(&sig.kappa, pa, pb, kz, kon, idle) {
                         raw.push((false, f, l));
                     }
                 }
-                for r in pa..pb {
-                    why[r] = Some(Exclusion::Idle);
-                }
+                why[pa..pb].iter_mut().for_each(|w| *w = Some(Exclusion::Idle));
             }
         }
     }
@@ -470,9 +469,7 @@ pub fn find_sweeps(
     let mut sr_zeroed = 0;
     for (is_sa, f, l) in raw {
         if l + 1 - f < min_rows {
-            for r in f..=l {
-                why[r] = Some(Exclusion::ShortSweep);
-            }
+            why[f..=l].iter_mut().for_each(|w| *w = Some(Exclusion::ShortSweep));
             continue;
         }
         let rows = f..=l;
@@ -503,9 +500,7 @@ pub fn find_sweeps(
             vx_mps: sig.v_mps.as_ref().map(|v| med(v)).filter(|v| v.is_finite()).unwrap_or(0.0),
             slip_reach: reach,
         };
-        for r in f..=l {
-            why[r] = None;
-        }
+        why[f..=l].iter_mut().for_each(|w| *w = None);
         sweeps.push(FoundSweep { cell, conditioning: false, first: f, last: l });
     }
     // Rows of moving pieces outside any sweep: a sweep cut off, or a slip angle being set.
@@ -549,11 +544,18 @@ fn mark_incomplete(why: &mut [Option<Exclusion>], sa_deg: &[f64], zero: f64) {
         while i < n && why[i] == Some(Exclusion::SlipAngleChange) {
             i += 1;
         }
-        // A sweep crosses zero; setting a held angle goes from one level to another.
+        // A sweep crosses zero; setting a held angle goes from one level to another; the edges
+        // of a sweep's window at zero slip are just rolling.
         let crosses = sa_deg[s..i].iter().any(|v| *v > zero) && sa_deg[s..i].iter().any(|v| *v < -zero);
-        if crosses {
-            why[s..i].iter_mut().for_each(|w| *w = Some(Exclusion::IncompleteSweep));
-        }
+        let at_zero = sa_deg[s..i].iter().all(|v| v.abs() <= 2.0 * zero);
+        let reason = if at_zero {
+            Exclusion::Idle
+        } else if crosses {
+            Exclusion::IncompleteSweep
+        } else {
+            Exclusion::SlipAngleChange
+        };
+        why[s..i].iter_mut().for_each(|w| *w = Some(reason));
     }
 }
 

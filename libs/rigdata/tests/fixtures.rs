@@ -148,3 +148,36 @@ fn dat_and_mat_of_one_run_give_the_same_dataset() {
         }
     }
 }
+
+#[test]
+fn unknown_units_and_test_kind_disagreements_are_named() {
+    let run = ttc_run(&FixtureSpec::cornering());
+    let mut t = run.table.clone();
+    t.columns.iter_mut().find(|c| c.name == "P").unwrap().unit = "furlong".into();
+    let e = read_bytes(to_dat(&t, DatLayout::default()).as_bytes(), "u.dat", FileFormat::Dat, &ReadOptions::default())
+        .unwrap_err()
+        .to_string();
+    assert!(e.starts_with("u.dat: channel P: unknown unit `furlong`"), "{e}");
+    let mut t = run.table.clone();
+    t.columns.iter_mut().find(|c| c.name == "FZ").unwrap().unit = "deg".into();
+    let e = read_bytes(to_dat(&t, DatLayout::default()).as_bytes(), "w.dat", FileFormat::Dat, &ReadOptions::default())
+        .unwrap_err()
+        .to_string();
+    assert!(e.contains("channel FZ: unit `deg` is a unit of angle; FZ needs a unit of force"), "{e}");
+    // A title (a .dat has no testid) that says drive/brake on a cornering run: a warning, the
+    // data decides.
+    let mut t = run.table.clone();
+    t.title = Some("TIRF Data File: Run 7; Drive/Brake/Combined, 12psi".into());
+    let (d, r) = import(to_dat(&t, DatLayout::default()).as_bytes(), "k.dat", FileFormat::Dat);
+    assert!(d.segments.iter().all(|s| s.cell.unwrap().kind == SweepKind::Cornering));
+    assert!(
+        r.warnings.iter().any(|w| w.message.contains("drive/brake/combined) but 10 slip-angle sweeps")),
+        "{:?}",
+        r.warnings
+    );
+    // An ISO-W reading forced on an SAE file flips the load negative: nothing is loaded.
+    let opt = ReadOptions { convention: rigdata::Convention::IsoW, ..ReadOptions::default() };
+    let (d, r) =
+        read_bytes(to_dat(&run.table, DatLayout::default()).as_bytes(), "iso.dat", FileFormat::Dat, &opt).unwrap();
+    assert!(d.segments.is_empty() && r.convention == "ISO-W" && r.convention_basis == "given");
+}

@@ -207,8 +207,8 @@ fn foreign_tdx(t: &ChannelTable, rows: std::ops::Range<usize>, id: usize) -> Str
     let mut s = format!(
         "**HEADER\nRELEASE   1.3\nMEASID    m{id}\nMANUFACT  Fixture\nTYRESIZE  20.5x7.0-13\n\n**COMMENTS\nforeign file\n\n**CONSTANTS\n"
     );
-    let _ = writeln!(s, "{:<10}{:<30}{:<10}{}", "FNOMIN", "Nominal load", "kN", "1.1");
-    let _ = writeln!(s, "{:<10}{:<30}{:<10}{}", "TESTMETH", "Test method", "-", "Drive/Brake/Combined");
+    let _ = writeln!(s, "{:<10}{:<30}{:<10}1.1", "FNOMIN", "Nominal load", "kN");
+    let _ = writeln!(s, "{:<10}{:<30}{:<10}Drive/Brake/Combined", "TESTMETH", "Test method", "-");
     s.push_str("\n**MEASURCHNLS\n");
     for (_, name, unit, _, factor, _) in &map {
         let offset = if *unit == "degC" { " 273.15" } else { "" };

@@ -152,7 +152,7 @@ fn numbers(cx: &Ctx, e: &Element, var: &str) -> Result<Vec<f64>, ReadError> {
 fn text_of(cx: &Ctx, e: &Element, var: &str) -> Result<String, ReadError> {
     Ok(match e.ty {
         ty::UINT16 | ty::UTF16 => {
-            if e.data.len() % 2 != 0 {
+            if !e.data.len().is_multiple_of(2) {
                 return Err(cx.err(var, "UTF-16 text with an odd number of bytes"));
             }
             let u: Vec<u16> = e
@@ -178,7 +178,7 @@ fn text_of(cx: &Ctx, e: &Element, var: &str) -> Result<String, ReadError> {
 fn char_rows(text: &str, dims: &[usize]) -> String {
     let chars: Vec<char> = text.chars().collect();
     let rows = dims.first().copied().unwrap_or(1).max(1);
-    if rows == 1 || chars.len() % rows != 0 {
+    if rows == 1 || !chars.len().is_multiple_of(rows) {
         return text.trim_end_matches(['\0', ' ']).to_owned();
     }
     let cols = chars.len() / rows;

@@ -71,7 +71,7 @@ impl Out {
     }
 
     fn pad(&mut self) {
-        while self.b.len() % 8 != 0 {
+        while !self.b.len().is_multiple_of(8) {
             self.b.push(0);
         }
     }
@@ -230,7 +230,10 @@ pub fn to_mat(table: &ChannelTable, opt: &MatWriteOptions) -> Result<Vec<u8>, Re
             Some(role) if !c.unit.trim().is_empty() && c.unit.trim() != role.ttc_unit() => {
                 let place = Place::file(&table.source).channel(&c.name);
                 let from = units::parse(&c.unit).filter(|u| u.quantity == role.quantity()).ok_or_else(|| {
-                    ReadError::at(place.clone(), format!("unit `{}` is not a {} unit", c.unit, role.quantity().name()))
+                    ReadError::at(
+                        place.clone(),
+                        format!("unit `{}` is not a unit of {}", c.unit, role.quantity().name()),
+                    )
                 })?;
                 let to = units::parse(role.ttc_unit()).ok_or_else(|| ReadError::at(place, "no TTC unit"))?;
                 c.values.iter().map(|&v| to.from_target(from.to_target(v))).collect()
