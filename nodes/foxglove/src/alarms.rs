@@ -31,8 +31,8 @@ impl AlarmDetector {
             // Statuses are named "<node>: <check>".
             let check = s.name.rsplit(": ").next().unwrap_or(&s.name).to_owned();
             let (old_level, old_message) = self.last.get(&check).cloned().unwrap_or((DS::OK, String::new()));
-            let rose = s.level > old_level
-                || (check == "thermal_timeout" && s.level >= DS::WARN && s.message != old_message);
+            let rose =
+                s.level > old_level || (check == "thermal_timeout" && s.level >= DS::WARN && s.message != old_message);
             if rose && matches!(s.level, DS::WARN | DS::ERROR) {
                 out.push(Alarm {
                     level: s.level,

@@ -91,7 +91,12 @@ fn level_name(level: u8) -> &'static str {
 fn is_notable(phase: u8) -> bool {
     matches!(
         phase,
-        PS::PHASE_IDLE | PS::PHASE_PAUSED | PS::PHASE_ABORTED | PS::PHASE_ESTOP | PS::PHASE_COMPLETE | PS::PHASE_TYRE_CHANGE
+        PS::PHASE_IDLE
+            | PS::PHASE_PAUSED
+            | PS::PHASE_ABORTED
+            | PS::PHASE_ESTOP
+            | PS::PHASE_COMPLETE
+            | PS::PHASE_TYRE_CHANGE
     )
 }
 
@@ -245,8 +250,8 @@ impl ViewCore {
             self.emit(out, View::Alarms, &log_line(t, level, "sequencer", msg));
         }
         // A new sweep: the one that ran becomes the previous trace, complete.
-        let new_sweep = st.phase == PS::PHASE_SWEEP
-            && self.current.as_ref().is_none_or(|c| c.trace().sweep_name != st.sweep_name);
+        let new_sweep =
+            st.phase == PS::PHASE_SWEEP && self.current.as_ref().is_none_or(|c| c.trace().sweep_name != st.sweep_name);
         if new_sweep {
             if let Some(done) = self.current.take() {
                 let done = done.into_trace();
@@ -279,7 +284,9 @@ impl ViewCore {
                 "foxglove",
                 format!("{} from {client} sent to the sequencer", crate::config::command_name(c.command)),
             ),
-            Err(why) => log_line(self.rig_time_s, LOG_WARNING, "foxglove", format!("refused a command from {client}: {why}")),
+            Err(why) => {
+                log_line(self.rig_time_s, LOG_WARNING, "foxglove", format!("refused a command from {client}: {why}"))
+            }
         };
         self.emit(&mut out, View::Alarms, &line);
         out
@@ -466,7 +473,9 @@ mod tests {
     fn notable_phase_changes_and_rising_alarms_are_logged_and_latched() {
         let mut core = ViewCore::new(None, 100);
         core.on_input(Input::State(&state(1.0, PS::PHASE_SWEEP, "sw0", 0)));
-        assert!(of(&core.on_input(Input::State(&state(2.0, PS::PHASE_THERMAL_PAUSE, "sw0", 0))), View::Alarms).is_empty());
+        assert!(
+            of(&core.on_input(Input::State(&state(2.0, PS::PHASE_THERMAL_PAUSE, "sw0", 0))), View::Alarms).is_empty()
+        );
         let paused = of(&core.on_input(Input::State(&state(3.0, PS::PHASE_PAUSED, "sw0", 0))), View::Alarms);
         assert!(paused[0]["message"].as_str().expect("text").contains("THERMAL_PAUSE -> PAUSED"), "{paused:?}");
         assert_eq!(paused[0]["level"], LOG_INFO);
@@ -483,7 +492,8 @@ mod tests {
     #[test]
     fn commands_are_logged_accepted_or_refused() {
         let mut core = ViewCore::new(None, 100);
-        let ok = core.on_command("client 1", &Ok(ProcedureCommand { command: ProcedureCommand::PAUSE, ..Default::default() }));
+        let ok = core
+            .on_command("client 1", &Ok(ProcedureCommand { command: ProcedureCommand::PAUSE, ..Default::default() }));
         assert!(json(&ok[0])["message"].as_str().expect("text").contains("PAUSE from client 1"));
         let no = core.on_command("client 2", &Err("ESTOP is not allowed".into()));
         assert_eq!(json(&no[0])["level"], LOG_WARNING);

@@ -357,7 +357,11 @@ impl TopicVisitor for Forward<'_> {
                         Ok(bytes) => {
                             let log_time = stamp_ns(&bytes).unwrap_or_else(|| shared.rig_time_ns());
                             if latched {
-                                shared.suite_latch.lock().unwrap_or_else(|p| p.into_inner()).keep(topic, log_time, &bytes);
+                                shared
+                                    .suite_latch
+                                    .lock()
+                                    .unwrap_or_else(|p| p.into_inner())
+                                    .keep(topic, log_time, &bytes);
                             }
                             channel.log_with_meta(&bytes, PartialMetadata { log_time: Some(log_time) });
                         }

@@ -206,9 +206,8 @@ fn run_dds(args: &RunArgs) -> anyhow::Result<()> {
         ];
         let entry = NodeEntry { name: "foxglove".into(), kind: "foxglove".into(), config: table(&foxglove) };
         // Checked before anything starts, so a bad --foxglove-allow names itself at once.
-        let c: foxglove_node::FoxgloveNodeConfig = toml::Value::Table(entry.config.clone())
-            .try_into()
-            .map_err(|e| anyhow::anyhow!("--foxglove: {e}"))?;
+        let c: foxglove_node::FoxgloveNodeConfig =
+            toml::Value::Table(entry.config.clone()).try_into().map_err(|e| anyhow::anyhow!("--foxglove: {e}"))?;
         c.validate().map_err(|e| anyhow::anyhow!("--foxglove-allow: {e}"))?;
         // Before the rig starts, so a browser sees the run from its first sample.
         nodes.insert(0, entry);
