@@ -290,9 +290,8 @@ pub async fn run(
         let _ = t.await;
     }
     // Stop accepting clients and close the ones connected.
-    if let Some(stopping) = handle.stop().into() {
-        let _ = tokio::time::timeout(std::time::Duration::from_secs(2), stopping.wait()).await;
-    }
+    let stopping = handle.stop();
+    let _ = tokio::time::timeout(std::time::Duration::from_secs(2), stopping.wait()).await;
     let stats = FoxgloveStats {
         taken: counters.into_iter().map(|(n, c)| (n, c.load(Ordering::Relaxed))).collect(),
         commands_sent,
