@@ -53,13 +53,13 @@ mod tests {
     use tyre_msgs::std_msgs::Header;
 
     fn diag(t: i32, statuses: &[(&str, u8, &str)]) -> DiagnosticArray {
-        let mut d = DiagnosticArray::default();
-        d.header = Header { stamp: tyre_msgs::builtin_interfaces::Time { sec: t, nanosec: 0 }, ..Header::default() };
-        d.status = statuses
-            .iter()
-            .map(|(n, l, m)| DS { name: format!("quality: {n}"), level: *l, message: (*m).into(), ..DS::default() })
-            .collect();
-        d
+        DiagnosticArray {
+            header: Header { stamp: tyre_msgs::builtin_interfaces::Time { sec: t, nanosec: 0 }, ..Header::default() },
+            status: statuses
+                .iter()
+                .map(|(n, l, m)| DS { name: format!("quality: {n}"), level: *l, message: (*m).into(), ..DS::default() })
+                .collect(),
+        }
     }
 
     #[test]

@@ -85,7 +85,6 @@ pub async fn run(clients: usize, rate_hz: f64, seconds: f64, port: u16) -> anyho
     let mut child = std::process::Command::new(exe)
         .args(["node", "foxglove", "--config"])
         .arg(&launch)
-        .env("RUST_LOG", "warn")
         .spawn()
         .context("start the foxglove node")?;
     let pid = child.id();
