@@ -24,6 +24,27 @@ pub enum BenchCmd {
         #[arg(long, default_value = "out/bench_recorder.mcap")]
         out: std::path::PathBuf,
     },
+    /// The foxglove node (its own process) serving RigSamples to N WebSocket clients: delivered
+    /// msg/s, latency against a plain DDS subscriber, and the node's CPU.
+    Foxglove {
+        /// Foxglove protocol clients subscribed to /rig/sample.
+        #[arg(long, default_value_t = 1)]
+        clients: usize,
+        /// Publish rate (0 = flat out, for throughput).
+        #[arg(long, default_value_t = 1000.0)]
+        rate_hz: f64,
+        #[arg(long, default_value_t = 10.0)]
+        seconds: f64,
+        /// Port of the node's WebSocket server.
+        #[arg(long, default_value_t = 18766)]
+        port: u16,
+    },
+}
+
+/// Wall clock, ns since the UNIX epoch.
+pub(crate) fn wall_ns() -> f64 {
+    let d = SystemTime::now().duration_since(SystemTime::UNIX_EPOCH).unwrap_or_default();
+    d.as_secs_f64() * 1e9
 }
 
 fn wall_time() -> Time {
@@ -31,7 +52,7 @@ fn wall_time() -> Time {
     Time { sec: d.as_secs() as i32, nanosec: d.subsec_nanos() }
 }
 
-fn sample(seq: u64) -> RigSample {
+pub(crate) fn sample(seq: u64) -> RigSample {
     RigSample {
         header: Header { stamp: wall_time(), frame_id: "iso_w".into() },
         seq,
@@ -42,7 +63,7 @@ fn sample(seq: u64) -> RigSample {
     }
 }
 
-fn percentile(sorted: &[f64], p: f64) -> f64 {
+pub(crate) fn percentile(sorted: &[f64], p: f64) -> f64 {
     if sorted.is_empty() {
         return f64::NAN;
     }
@@ -53,6 +74,9 @@ pub fn run(cmd: BenchCmd) -> anyhow::Result<()> {
     let rt = tokio::runtime::Builder::new_multi_thread().enable_all().build().context("tokio")?;
     let cfg = RuntimeConfig::default();
     match cmd {
+        BenchCmd::Foxglove { clients, rate_hz, seconds, port } => {
+            rt.block_on(crate::bench_foxglove::run(clients, rate_hz, seconds, port))
+        }
         BenchCmd::DdsLatency { rate_hz, seconds } => rt.block_on(async {
             let mut a = RosNode::new("bench_pub", &cfg)?;
             let mut b = RosNode::new("bench_sub", &cfg)?;

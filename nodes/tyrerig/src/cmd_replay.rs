@@ -28,6 +28,34 @@ pub struct ReplayArgs {
     /// Seconds to wait for subscribers to discover the replay before publishing.
     #[arg(long, default_value_t = 1.0)]
     pub discovery_wait_s: f64,
+    /// Also serve the replay to Foxglove on this port (default 8765), with the plan of the
+    /// procedure the log names; Foxglove clients may not send commands to a replay.
+    #[arg(long, value_name = "PORT", num_args = 0..=1, default_missing_value = "8765")]
+    pub foxglove: Option<u16>,
+    /// Address the Foxglove server listens on (0.0.0.0 to serve other machines).
+    #[arg(long, default_value = "127.0.0.1", requires = "foxglove")]
+    pub foxglove_host: String,
+}
+
+/// The foxglove node's config for a replayed log: the plan from the procedure file and inputs
+/// its metadata names, when that file is still there.
+fn foxglove_config(args: &ReplayArgs, log: &LogReader, port: u16) -> foxglove_node::FoxgloveNodeConfig {
+    let mut c = foxglove_node::FoxgloveNodeConfig { host: args.foxglove_host.clone(), port, ..Default::default() };
+    let md = log.metadata();
+    if let Some(file) = md.get("procedure").and_then(|p| p.get("file")).map(PathBuf::from) {
+        if file.exists() {
+            c.procedure = Some(file);
+        } else {
+            tracing::warn!("{}: procedure file {} not found; no plan view", args.file.display(), file.display());
+        }
+    }
+    if let Some(li) = md.get("tyre").and_then(|t| t.get("load_index")).and_then(|v| v.parse().ok()) {
+        c.load_index = li;
+    }
+    if let Some(style) = md.get("procedure").and_then(|p| p.get("sweeps")).and_then(|v| v.parse().ok()) {
+        c.sweeps = style;
+    }
+    c
 }
 
 pub fn run(args: ReplayArgs) -> anyhow::Result<()> {
@@ -45,11 +73,28 @@ pub fn run(args: ReplayArgs) -> anyhow::Result<()> {
         progress: true,
     };
     let rt = tokio::runtime::Builder::new_multi_thread().enable_all().build().context("tokio runtime")?;
+    let foxglove = args.foxglove.map(|port| foxglove_config(&args, &log, port));
     let stats = rt.block_on(async {
         let shutdown = Shutdown::new();
         shutdown.on_signals()?;
+        // The foxglove node first, so it discovers the replay's publishers within their wait.
+        let server = match foxglove {
+            Some(cfg) => {
+                let node = RosNode::new("foxglove", &runtime)?;
+                let sd = shutdown.clone();
+                Some(tokio::spawn(async move { foxglove_node::run(node, cfg, sd).await }))
+            }
+            None => None,
+        };
         let node = RosNode::new("replay", &runtime)?;
-        anyhow::Ok(recorder::replay::replay(node, &log, &opts, shutdown).await?)
+        let stats = recorder::replay::replay(node, &log, &opts, shutdown.clone()).await;
+        if let Some(server) = server {
+            // Let the last messages reach the clients, then stop the server with the replay.
+            tokio::time::sleep(std::time::Duration::from_millis(500)).await;
+            shutdown.trigger();
+            server.await.context("foxglove node")??;
+        }
+        anyhow::Ok(stats?)
     })?;
     let factor = if stats.wall_s > 0.0 { stats.log_span_s / stats.wall_s } else { f64::INFINITY };
     println!(

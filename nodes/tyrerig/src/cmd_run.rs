@@ -51,6 +51,16 @@ pub struct RunArgs {
     /// No progress bar.
     #[arg(long)]
     pub quiet: bool,
+    /// Serve the run live to Foxglove on this port (default 8765): open
+    /// `ws://<host>:<port>` in the Foxglove app with launch-config/foxglove/tyre-rig.json.
+    #[arg(long, value_name = "PORT", num_args = 0..=1, default_missing_value = "8765")]
+    pub foxglove: Option<u16>,
+    /// Address the Foxglove server listens on (0.0.0.0 to serve other machines).
+    #[arg(long, default_value = "127.0.0.1", requires = "foxglove")]
+    pub foxglove_host: String,
+    /// Commands Foxglove clients may send on procedure/command (e.g. PAUSE,RESUME); none by default.
+    #[arg(long, value_delimiter = ',', requires = "foxglove")]
+    pub foxglove_allow: Vec<String>,
 }
 
 /// A procedure by name, or a procedure file.
@@ -106,6 +116,9 @@ pub fn spec_of(args: &RunArgs) -> RunSpec {
 pub fn run(args: RunArgs) -> anyhow::Result<()> {
     if !args.headless {
         return run_dds(&args);
+    }
+    if args.foxglove.is_some() {
+        anyhow::bail!("--foxglove serves the suite's DDS topics; a --headless run has none (drop --headless)");
     }
     let spec = spec_of(&args);
     let wall = std::time::Instant::now();
@@ -231,13 +244,30 @@ fn run_dds(args: &RunArgs) -> anyhow::Result<()> {
         .collect();
     let recorder = vec![("output", path_value(&args.out)?), ("metadata", V::Table(md))];
     let quality = vec![("load_index", V::Integer(i64::from(declared_index)))];
-    let nodes = [
+    let mut nodes = vec![
         NodeEntry { name: "recorder".into(), kind: "recorder".into(), config: table(&recorder) },
         NodeEntry { name: "thermal".into(), kind: "thermal".into(), config: toml::Table::new() },
         NodeEntry { name: "sequencer".into(), kind: "sequencer".into(), config: table(&sequencer) },
         NodeEntry { name: "quality".into(), kind: "quality".into(), config: table(&quality) },
         NodeEntry { name: "virtual_rig".into(), kind: "virtual_rig".into(), config: table(&rig) },
     ];
+    if let Some(port) = args.foxglove {
+        let foxglove = vec![
+            ("host", V::String(args.foxglove_host.clone())),
+            ("port", V::Integer(i64::from(port))),
+            ("allow_commands", V::Array(args.foxglove_allow.iter().map(|c| V::String(c.clone())).collect())),
+            ("procedure", path_value(&spec.procedure_file)?),
+            ("load_index", V::Integer(i64::from(spec.inputs.load_index))),
+            ("sweeps", V::String(format!("{:?}", spec.inputs.sweeps).to_lowercase())),
+        ];
+        let entry = NodeEntry { name: "foxglove".into(), kind: "foxglove".into(), config: table(&foxglove) };
+        // Checked before anything starts, so a bad --foxglove-allow names itself at once.
+        let c: foxglove_node::FoxgloveNodeConfig =
+            toml::Value::Table(entry.config.clone()).try_into().map_err(|e| anyhow::anyhow!("--foxglove: {e}"))?;
+        c.validate().map_err(|e| anyhow::anyhow!("--foxglove-allow: {e}"))?;
+        // Before the rig starts, so a browser sees the run from its first sample.
+        nodes.insert(0, entry);
+    }
     let runtime = RuntimeConfig::default();
     let wall = std::time::Instant::now();
     let rt = tokio::runtime::Builder::new_multi_thread().enable_all().build()?;

@@ -49,16 +49,19 @@ pub enum NodeKind {
     Sequencer,
     /// Live channels and the quality monitor in one node (`monitor::shell`).
     Quality,
+    /// The Foxglove WebSocket server for control-room screens (`foxglove_node`).
+    Foxglove,
 }
 
 impl NodeKind {
-    pub const ALL: [NodeKind; 6] = [
+    pub const ALL: [NodeKind; 7] = [
         NodeKind::Recorder,
         NodeKind::TestPattern,
         NodeKind::VirtualRig,
         NodeKind::Thermal,
         NodeKind::Sequencer,
         NodeKind::Quality,
+        NodeKind::Foxglove,
     ];
 
     pub fn name(self) -> &'static str {
@@ -69,6 +72,7 @@ impl NodeKind {
             NodeKind::Thermal => "thermal",
             NodeKind::Sequencer => "sequencer",
             NodeKind::Quality => "quality",
+            NodeKind::Foxglove => "foxglove",
         }
     }
 
@@ -155,6 +159,10 @@ fn typed_config_check(entry: &NodeEntry) -> anyhow::Result<()> {
             let c: monitor::shell::QualityNodeConfig = config_of(entry)?;
             c.validate()?;
         }
+        Some(NodeKind::Foxglove) => {
+            let c: foxglove_node::FoxgloveNodeConfig = config_of(entry)?;
+            c.validate()?;
+        }
         None => bail!("unknown node kind {:?}", entry.kind),
     }
     Ok(())
@@ -194,6 +202,11 @@ pub async fn run_node(entry: &NodeEntry, runtime: &RuntimeConfig, shutdown: Shut
             let c: monitor::shell::QualityNodeConfig = config_of(entry)?;
             monitor::shell::run(node, c, shutdown).await?;
         }
+        Some(NodeKind::Foxglove) => {
+            let mut c: foxglove_node::FoxgloveNodeConfig = config_of(entry)?;
+            c.procedure = c.procedure.map(|p| resolve(entry, &p));
+            foxglove_node::run(node, c, shutdown).await?;
+        }
         None => bail!("unknown node kind {:?}", entry.kind),
     }
     Ok(())
@@ -215,7 +228,7 @@ mod tests {
         }
         let suite = LaunchFile::load(&launch_config().join("suite.toml")).expect("suite.toml");
         let kinds: Vec<_> = suite.nodes.iter().map(|n| n.kind.as_str()).collect();
-        for k in ["recorder", "virtual_rig", "thermal", "sequencer", "quality"] {
+        for k in ["recorder", "virtual_rig", "thermal", "sequencer", "quality", "foxglove"] {
             assert!(kinds.contains(&k), "suite.toml has no {k} node: {kinds:?}");
         }
     }
@@ -234,6 +247,10 @@ mod tests {
             let err = format!("{:#}", LaunchFile::load(&path).expect_err(body));
             assert!(err.contains("bad.toml") && err.contains("\"q\"") && err.contains(expect), "{body}: {err}");
         }
+        std::fs::write(&path, "[[node]]\nname = \"q\"\nkind = \"foxglove\"\n[node.config]\nallow_commands = [\"PAUSE\", \"SELFDESTRUCT\"]\n")
+            .expect("write");
+        let err = format!("{:#}", LaunchFile::load(&path).expect_err("unknown command"));
+        assert!(err.contains("bad.toml") && err.contains("allow_commands") && err.contains("SELFDESTRUCT"), "{err}");
         for (body, expect) in [("time_scale = 0.0", "time_scale"), ("time_scale = -3.0", "time_scale")] {
             std::fs::write(
                 &path,

@@ -7,6 +7,7 @@
 use clap::{Parser, Subcommand};
 
 // --- subcommand modules (one per capability) ---
+mod bench_foxglove;
 mod cmd_bench;
 mod cmd_data;
 mod cmd_doctor;
