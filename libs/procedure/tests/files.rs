@@ -328,8 +328,11 @@ fn fz0_given_directly_replaces_the_load_index_and_scales_graph_sweeps() {
     for (x, y) in a.iter().zip(&b) {
         assert!((y / x - 1100.0 / procedure::fz0_n(110).unwrap()).abs() < 1e-12, "{x} → {y}");
     }
-    let e = expand(&load(&dir().join("gs2mf_freerolling.toml")).unwrap(), &RunInputs { fz0_n: Some(-5.0), ..RunInputs::default() })
-        .unwrap_err()
-        .to_string();
+    let e = expand(
+        &load(&dir().join("gs2mf_freerolling.toml")).unwrap(),
+        &RunInputs { fz0_n: Some(-5.0), ..RunInputs::default() },
+    )
+    .unwrap_err()
+    .to_string();
     assert!(e.contains("fz0_n"), "{e}");
 }
