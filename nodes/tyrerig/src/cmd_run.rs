@@ -193,7 +193,7 @@ fn run_dds(args: &RunArgs) -> anyhow::Result<()> {
     }
     // The monitor judges the loads against the tyre's own rating (as headless runs do), not
     // against the index the operator entered.
-    let (rig_cfg, tyre) = suite::headless::rig_config(&spec)?;
+    let (rig_cfg, tyre) = suite::headless::rig_and_tyre(&spec)?;
     let declared_index = suite::headless::declared_load_index(&tyre);
     let inputs = suite::headless::run_inputs(&spec, &rig_cfg, &tyre);
 
