@@ -12,13 +12,16 @@ use std::path::{Path, PathBuf};
 use plotters::prelude::*;
 use rigsim::{BrushInput, BrushParams};
 
-/// One chart: title, axis labels, labelled series of (x, y).
+/// A labelled series of (x, y), drawn as dots (`true`) or a line.
+type Series = (String, Vec<(f64, f64)>, bool);
+
+/// One chart: title, axis labels, labelled series.
 struct Chart {
     file: String,
     title: String,
     x: &'static str,
     y: &'static str,
-    series: Vec<(String, Vec<(f64, f64)>, bool)>,
+    series: Vec<Series>,
 }
 
 const COLOURS: [RGBColor; 5] = [
