@@ -269,7 +269,7 @@ pub fn export_ttc(run: &VirtualRun, opts: &TtcExportOptions) -> Result<ChannelTa
     }
     let dt_in = (samples[samples.len() - 1].runtime_s - samples[0].runtime_s) / (samples.len() - 1) as f64;
     let per_row = (1.0 / (dt_in * f64::from(opts.rate_hz))).round();
-    if !(per_row >= 1.0) {
+    if per_row.is_nan() || per_row < 1.0 {
         return Err(ExportError::Option {
             key: "rate_hz",
             reason: format!("{} Hz is faster than the log's {:.0} Hz samples", opts.rate_hz, 1.0 / dt_in),

@@ -12,6 +12,17 @@
 //! Always on:
 //! - **Steady state**: MF-Tyre 6.1 (`mftyre`, use mode 111) forces and moments, loaded radius
 //!   (DSTWOWHC, quantised to the rig's 0.1 mm) and effective rolling radius (wheel speed).
+//!   Or, with `[tyre] model = "brush"`, the physical [`brush`] tyre ([`VirtualTyre`]): a brush
+//!   with a parabolic pressure q(x) = 3Fz/(4a)·(1 − x²/a²) over a patch of half-length
+//!   a = q_a·√(2·R0·ρ) from the nonlinear vertical deflection ρ; adhesion up to the static
+//!   friction ellipse at λ = |(Cx·σx/μx, Cy·σy/μy)|/(3Fz), sliding behind it at a kinetic
+//!   friction μk = μs·(r + (1 − r)/(1 + Vs/Vμ)) that falls with the sliding speed; static
+//!   friction μs = μ0·(Fz/Fz0)^(−n) (power law) × the rig's grip factor; closed forms
+//!   F = C·σ·(1 − λ)² + μk·Fz·λ²(3 − 2λ)·ŝ and MZ = −(a/3)·Cy·σy·(1 − λ)²(1 − 4λ) −
+//!   3·μk,y·Fz·a·λ²(1 − λ)²·ŝy; carcass compliance in series (αe = α − MZ/cψ,
+//!   κe = κ − FX/EA, patch shift FY/ccy giving MZ −= FX·FY/ccy and MX = Fz·FY/ccy − …); camber
+//!   as an equivalent slip; pressure in the vertical, bristle and friction terms. Derivations,
+//!   parameters and what the Magic Formula cannot reproduce of it: `docs/brush-tyre.md`.
 //! - **Rig**: rate/acceleration-limited servos for slip angle and slip ratio, rate limits for
 //!   load, camber and belt speed (profiles `mts_flattrac`, `calspan_tirf`), a first-order
 //!   pressure regulator (~20 s to settle), the envelope (refused setpoints send the rig safe),
@@ -41,8 +52,8 @@
 //! - `rim_slip`: above 60 %/s of slip-ratio change the tyre turns on the rim: the tread's slip
 //!   ratio lags the rim's (measured) one.
 //!
-//! With every effect off the samples equal the steady-state MF model at the rig's actual
-//! (actuator-limited) inputs.
+//! With every effect off the samples equal the steady-state tyre model (MF or brush) at the
+//! rig's actual (actuator-limited) inputs.
 //!
 //! [`calibration`] runs the thesis's comparison sweeps (Tables 3.6.2-H and 3.6.2-I) and the
 //! warm-up and wear checks on the default tyre; `tyrerig rig calibrate` prints them.

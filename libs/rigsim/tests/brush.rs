@@ -301,7 +301,7 @@ fn nonsense_inputs_never_panic_and_stay_finite() {
     let odd = [f64::NAN, f64::INFINITY, -1.0, -1.5, 0.0, 1e9, -1e9, 1e-300];
     for &fz in &[0.0, -10.0, 1e-9, 1100.0, 1e7, f64::NAN] {
         for &k in &odd {
-            for &a in &[0.0, 1.5707963, -1.5707963, 3.0, f64::NAN] {
+            for &a in &[0.0, std::f64::consts::FRAC_PI_2, -std::f64::consts::FRAC_PI_2, 3.0, f64::NAN] {
                 let o = p.evaluate(&BrushInput { gamma_rad: 0.3, p_pa: -5.0, ..BrushInput::new(fz, k, a, 11.0) });
                 if fz.is_finite() && k.is_finite() && a.is_finite() {
                     assert!(o.fx_n.is_finite() && o.fy_n.is_finite() && o.mz_nm.is_finite(), "{fz} {k} {a}: {o:?}");

@@ -23,6 +23,9 @@ pub struct QualityNodeConfig {
     /// The ETRTO load index the tyre declares (sidewall, data sheet): the monitor judges the
     /// loads against this rating, not against what the operator typed in at the rig.
     pub load_index: u32,
+    /// The tyre's own nominal load [N] when its rating is not an ETRTO index (race tyres);
+    /// replaces the index's Fz0.
+    pub fz0_n: Option<f64>,
     /// Tread depth of the new tyre [mm].
     pub tread_new_mm: f64,
     /// Legal minimum tread depth [mm].
@@ -37,6 +40,7 @@ impl Default for QualityNodeConfig {
     fn default() -> Self {
         Self {
             load_index: 110,
+            fz0_n: None,
             tread_new_mm: 5.6,
             tread_min_mm: 1.6,
             channels: channels::ChannelsConfig::default(),
@@ -66,6 +70,10 @@ impl QualityNodeConfig {
         }
         t.tread_new_mm = self.tread_new_mm;
         t.tread_min_mm = self.tread_min_mm;
+        if let Some(f) = self.fz0_n {
+            t.fz0_n = f;
+            t.validate()?;
+        }
         Ok(t)
     }
 

@@ -98,7 +98,9 @@ pub async fn run(mut node: RosNode, cfg: SequencerNodeConfig, shutdown: Shutdown
         pressures_bar: cfg.pressures_bar,
         nominal_speed_mps: cfg.nominal_speed_mps,
         sweeps: cfg.sweeps,
-        ..RunInputs::default()
+        // The plan is expanded inside the envelope the core guards (a race tyre's 0.7 bar
+        // needs a lower pressure limit than the default 1 bar).
+        limits: cfg.core.envelope,
     };
     let plan = procedure::expand(&doc, &inputs).map_err(|e| SequencerNodeError::Procedure(e.to_string()))?;
     let checkpoint = match &cfg.checkpoint {

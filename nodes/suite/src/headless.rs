@@ -14,7 +14,7 @@ use mcaplog::LogWriteError;
 use monitor::{MonitorConfig, TyreInfo, pipeline::Pipeline};
 use procedure::Plan;
 use procedure::RunInputs;
-use rigsim::{RigConfig, VirtualRig, VirtualTyre};
+use rigsim::{RigConfig, TyreParams, VirtualRig, VirtualTyre};
 use sequencer::{Sequencer, SequencerConfig, SequencerEvent};
 use std::collections::BTreeMap;
 use thermal::{ThermalConfig, ThermalGate};
@@ -67,9 +67,22 @@ impl std::fmt::Debug for Headless {
     }
 }
 
+/// Loads the rig config of `spec` with its overrides and its MF-Tyre 6.1 tyre (the truth a fit
+/// of an MF rig's log is compared with); a brush tyre is an error here ([`rig_and_tyre`]).
+pub fn rig_config(spec: &RunSpec) -> Result<(RigConfig, TyreParams), HeadlessError> {
+    let (cfg, tyre) = rig_and_tyre(spec)?;
+    match tyre {
+        VirtualTyre::Mf(p) => Ok((cfg, *p)),
+        VirtualTyre::Brush(_) => Err(HeadlessError::Tyre {
+            path: cfg.tyre_file.display().to_string(),
+            detail: "a brush tyre, not an MF-Tyre 6.1 .tir".into(),
+        }),
+    }
+}
+
 /// Loads the rig config of `spec` with its overrides (tyre, effects, wear multiplier) and the
 /// tyre it names (MF `.tir` or brush file, per the config's `[tyre] model`).
-pub fn rig_config(spec: &RunSpec) -> Result<(RigConfig, VirtualTyre), HeadlessError> {
+pub fn rig_and_tyre(spec: &RunSpec) -> Result<(RigConfig, VirtualTyre), HeadlessError> {
     let mut cfg = RigConfig::load(&spec.rig_config).map_err(|e| HeadlessError::RigConfig(e.to_string()))?;
     if let Some(t) = &spec.tyre {
         cfg.tyre_file = t.clone();
@@ -141,7 +154,7 @@ fn tyre_info(cfg: &RigConfig, tyre: &VirtualTyre) -> Result<TyreInfo, HeadlessEr
 impl Headless {
     /// Builds the cores for `spec`.
     pub fn new(spec: &RunSpec, thermal_cfg: ThermalConfig, seq_cfg: SequencerConfig) -> Result<Self, HeadlessError> {
-        let (rig_cfg, tyre) = rig_config(spec)?;
+        let (rig_cfg, tyre) = rig_and_tyre(spec)?;
         let inputs = run_inputs(spec, &rig_cfg, &tyre);
         let plan = plan(spec, &inputs)?;
         let rig = VirtualRig::new(rig_cfg.clone(), tyre.clone(), spec.seed)

@@ -134,3 +134,30 @@ fn monitor_catches_a_wrong_load_rating_early_and_measures_wear() {
     );
     assert!(first.rig_time_s < fm_end, "load_rating ERROR at {:.0} s, after {fm_end:.0} s", first.rig_time_s);
 }
+
+/// The full GS2MF suite runs on both brush tyres (docs/brush-tyre.md): loads from the tyre's own
+/// Fz0 (the race tyre has no ETRTO index), its test pressures inside the rig's envelope, and no
+/// setpoint refused on the way.
+#[test]
+fn gs2mf_runs_on_both_brush_tyres() {
+    for (config, fz0, pressures) in [
+        ("virtual_rig_brush_road.toml", 5579.4, [2.1, 2.5, 3.3]),
+        ("virtual_rig_brush_race.toml", 1100.0, [0.7, 0.84, 0.98]),
+    ] {
+        let mut spec = RunSpec::new(&launch_config(), ProcedureChoice::Gs2mf);
+        spec.rig_config = launch_config().join(config);
+        let mut h = Headless::new(&spec, thermal::ThermalConfig::default(), sequencer::SequencerConfig::default())
+            .unwrap_or_else(|e| panic!("{config}: {e}"));
+        assert!((h.plan().fz0_n - fz0).abs() < 0.5, "{config}: Fz0 {}", h.plan().fz0_n);
+        let md = h.metadata(&spec);
+        assert_eq!(md["tyre"]["model"], "brush");
+        assert_eq!(md["procedure"]["pressures_bar"], format!("{pressures:?}"));
+        let wall = std::time::Instant::now();
+        let s = h.run(&mut NullSink::default(), &mut |_, _| {}).expect("run");
+        println!("{config}\n{}\nwall {:.1} s", s.table(), wall.elapsed().as_secs_f64());
+        assert!(s.completed, "{config}: {s:?}");
+        assert_eq!(s.tyres_used, 2);
+        let refused: Vec<_> = s.alarms.iter().filter(|a| a.check == "envelope").collect();
+        assert!(refused.is_empty(), "{config}: {refused:?}");
+    }
+}

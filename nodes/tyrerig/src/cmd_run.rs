@@ -206,7 +206,7 @@ fn run_dds(args: &RunArgs) -> anyhow::Result<()> {
     }
     // The monitor judges the loads against the tyre's own rating (as headless runs do), not
     // against the index the operator entered.
-    let (rig_cfg, tyre) = suite::headless::rig_config(&spec)?;
+    let (rig_cfg, tyre) = suite::headless::rig_and_tyre(&spec)?;
     let declared_index = suite::headless::declared_load_index(&tyre);
     let inputs = suite::headless::run_inputs(&spec, &rig_cfg, &tyre);
 
@@ -243,7 +243,13 @@ fn run_dds(args: &RunArgs) -> anyhow::Result<()> {
         .map(|(k, m)| (k.clone(), V::Table(m.iter().map(|(a, b)| (a.clone(), V::String(b.clone()))).collect())))
         .collect();
     let recorder = vec![("output", path_value(&args.out)?), ("metadata", V::Table(md))];
-    let quality = vec![("load_index", V::Integer(i64::from(declared_index)))];
+    let mut quality = vec![("load_index", V::Integer(i64::from(declared_index)))];
+    if tyre.brush_params().is_some() {
+        // A brush tyre's own rating and tread, as the headless monitor gets them.
+        quality.push(("fz0_n", V::Float(tyre.fnomin_n())));
+        quality.push(("tread_new_mm", V::Float(rig_cfg.tyre.new_tread_depth_mm)));
+        quality.push(("tread_min_mm", V::Float(rig_cfg.tyre.legal_min_tread_depth_mm)));
+    }
     let mut nodes = vec![
         NodeEntry { name: "recorder".into(), kind: "recorder".into(), config: table(&recorder) },
         NodeEntry { name: "thermal".into(), kind: "thermal".into(), config: toml::Table::new() },
