@@ -41,6 +41,14 @@ pub struct LogMessage {
     pub data: Vec<u8>,
 }
 
+/// [`LogReader::loss_summary`]: whether anything is missing, and lines saying what.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct LossSummary {
+    /// Nothing lost, nothing malformed, no gap in `RigSample.seq`.
+    pub clean: bool,
+    pub lines: Vec<String>,
+}
+
 /// Per-topic statistics of a log.
 #[derive(Debug, Clone, PartialEq)]
 pub struct TopicInfo {
@@ -121,6 +129,69 @@ impl LogReader {
     /// Metadata records by name (`tyrerig`, `tyre`, `procedure`, …).
     pub fn metadata(&self) -> &BTreeMap<String, BTreeMap<String, String>> {
         &self.metadata
+    }
+
+    /// What the recorder lost, from its `tyrerig.loss` record: `None` when the log has none
+    /// (headless runs, imports, older recorders).
+    pub fn loss_report(&self) -> Option<Result<streamloss::LossReport, streamloss::RecordError>> {
+        self.metadata.get(streamloss::LOSS_RECORD).map(streamloss::LossReport::from_entries)
+    }
+
+    /// The gaps in `RigSample.seq` on `topic`, read from the messages themselves (independent of
+    /// the recorder's own count, and available for every log): (samples, gaps, missing).
+    pub fn sample_seq_gaps(&self, topic: &str) -> Result<(u64, Vec<streamloss::Gap>, u64), LogError> {
+        let mut tracker = streamloss::SeqTracker::new();
+        for (_, s) in self.typed::<tyre_msgs::RigSample>(topic)? {
+            tracker.observe(s.seq);
+        }
+        Ok((tracker.received(), tracker.gaps().to_vec(), tracker.lost()))
+    }
+
+    /// What the log says it is missing, for people: the recorder's own tally (`tyrerig.loss`)
+    /// and, for every RigSample topic, the gaps in `RigSample.seq` read from the messages.
+    pub fn loss_summary(&self) -> LossSummary {
+        let mut out = LossSummary { clean: true, lines: Vec::new() };
+        match self.loss_report() {
+            None => out.lines.push("loss: no tyrerig.loss record (a headless run, an import or an older recorder)".into()),
+            Some(Err(e)) => {
+                out.clean = false;
+                out.lines.push(format!("loss: {e}"));
+            }
+            Some(Ok(r)) => {
+                let tally = if r.complete { "final tally" } else { "interim tally: the recorder did not stop cleanly" };
+                if r.is_clean() {
+                    out.lines.push(format!("loss ({tally}): nothing lost, nothing malformed"));
+                } else {
+                    out.clean = false;
+                    out.lines.push(format!(
+                        "loss ({tally}): {} message(s) lost, {} malformed",
+                        r.lost_total(),
+                        r.malformed_total()
+                    ));
+                    out.lines.extend(r.summary_lines().into_iter().map(|l| format!("  {l}")));
+                }
+            }
+        }
+        let sample_type = tyre_msgs::RigSample::ros_type_name();
+        for t in self.topics().into_iter().filter(|t| t.ros_type == sample_type) {
+            match self.sample_seq_gaps(&t.topic) {
+                Ok((n, _, 0)) => out.lines.push(format!("{}: RigSample.seq continuous over {n} samples", t.topic)),
+                Ok((n, gaps, missing)) => {
+                    out.clean = false;
+                    out.lines.push(format!(
+                        "{}: RigSample.seq has {missing} missing in {} gap(s) over {n} samples (first: {})",
+                        t.topic,
+                        gaps.len(),
+                        gaps.iter().take(5).map(ToString::to_string).collect::<Vec<_>>().join(" ")
+                    ));
+                }
+                Err(e) => {
+                    out.clean = false;
+                    out.lines.push(format!("{}: {e}", t.topic));
+                }
+            }
+        }
+        out
     }
 
     /// Topics with their types and message counts, sorted by topic name.

@@ -65,6 +65,22 @@ impl Qos {
     }
 }
 
+/// Reader history of a recorder on a [`Qos::Stream`] topic [samples]. The recorder's reader
+/// is the one that must never drop: its history is where samples wait while the writer thread
+/// compresses a chunk, so it is far deeper than the stream's (100 s at 1 kHz, ~40 MB of
+/// RigSamples at most). History depth is a reader-local setting; it does not affect matching.
+pub const RECORDER_STREAM_DEPTH: usize = 100_000;
+
+impl Qos {
+    /// The QoS a recorder's reader uses: the preset's, with a deeper history on streams.
+    pub fn recording_profile(self) -> QosProfile {
+        match self {
+            Qos::Stream => self.profile().history(History::KeepLast { depth: RECORDER_STREAM_DEPTH }),
+            other => other.profile(),
+        }
+    }
+}
+
 /// One row of the topic table.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub struct TopicSpec {

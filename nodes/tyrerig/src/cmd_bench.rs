@@ -109,44 +109,77 @@ pub fn run(cmd: BenchCmd) -> anyhow::Result<()> {
             let mut a = RosNode::new("bench_pub", &cfg)?;
             let publisher = a.publisher::<RigSample>(SuiteTopic::RigSample)?;
             tokio::time::sleep(Duration::from_secs(3)).await;
+            // Every publish call is timed: the rig's publisher must never be held up.
+            let mut call_us: Vec<f64> = Vec::with_capacity((rate_hz.max(1e5) * seconds) as usize);
+            let mut refused = 0u64;
             let start = Instant::now();
             let mut seq = 0u64;
+            let mut publish = |seq: u64, call_us: &mut Vec<f64>| {
+                let t0 = Instant::now();
+                let ok = publisher.publish(sample(seq)).is_ok();
+                call_us.push(t0.elapsed().as_secs_f64() * 1e6);
+                ok
+            };
             if rate_hz > 0.0 {
                 let mut tick = tokio::time::interval(Duration::from_secs_f64(1.0 / rate_hz));
                 while start.elapsed().as_secs_f64() < seconds {
                     tick.tick().await;
-                    publisher.publish(sample(seq)).map_err(|e| anyhow::anyhow!("{e:?}"))?;
+                    if !publish(seq, &mut call_us) {
+                        refused += 1; // the sample is gone: RigSample.seq shows the gap
+                    }
                     seq += 1;
                 }
             } else {
-                let mut blocked = 0u64;
                 while start.elapsed().as_secs_f64() < seconds {
-                    // Flat out, the reliable writer's history fills when the recorder falls
-                    // behind; back off and retry (flow control), never drop.
-                    while publisher.publish(sample(seq)).is_err() {
-                        blocked += 1;
-                        tokio::time::sleep(Duration::from_millis(1)).await;
+                    if !publish(seq, &mut call_us) {
+                        refused += 1;
                     }
                     seq += 1;
                     if seq.is_multiple_of(256) {
                         tokio::task::yield_now().await;
                     }
                 }
-                tracing::info!(blocked, "publisher back-offs");
             }
             let publish_s = start.elapsed().as_secs_f64();
             tokio::time::sleep(Duration::from_secs(2)).await;
             shutdown.trigger();
             let stats = rec.await??;
             let size = std::fs::metadata(&out).map(|m| m.len()).unwrap_or(0);
+            call_us.sort_by(f64::total_cmp);
+            let over_1ms = call_us.iter().filter(|&&u| u > 1000.0).count();
+            // Read the log back: what it holds and what it says it lost must add up to what was
+            // published (the first sample had seq 0).
+            let log = mcaplog::LogReader::open(&out)?;
+            let (in_log, _, seq_missing) = log.sample_seq_gaps("/rig/sample")?;
+            let samples = log.typed::<RigSample>("/rig/sample")?;
+            let first = samples.first().map_or(0, |(_, s)| s.seq);
+            let after_last = samples.last().map_or(seq, |(_, s)| seq.saturating_sub(1).saturating_sub(s.seq));
             println!(
-                "recorder through DDS, {}: published {seq} in {publish_s:.1} s, recorded {} \
-                 ({:.0} msg/s, {:.2} MB/s payload, file {:.2} MB)",
+                "recorder through DDS, {}: published {seq} in {publish_s:.1} s ({:.0} msg/s), {refused} refused by the writer",
                 if rate_hz > 0.0 { format!("{rate_hz} Hz") } else { "flat out".into() },
+                seq as f64 / publish_s
+            );
+            println!(
+                "  recorded {} ({:.0} msg/s, {:.2} MB/s payload, file {:.2} MB); the recorder reports {} lost, {} malformed",
                 stats.messages,
                 stats.messages as f64 / publish_s,
                 stats.payload_bytes as f64 / publish_s / 1e6,
-                size as f64 / 1e6
+                size as f64 / 1e6,
+                stats.lost,
+                stats.malformed
+            );
+            println!(
+                "  the log read back: {in_log} samples, {seq_missing} missing by RigSample.seq between the first ({first}) \
+                 and the last; {} published after the last recorded; {} not in the log and not reported",
+                after_last,
+                seq.saturating_sub(in_log + stats.lost.max(seq_missing) + first + after_last)
+            );
+            println!(
+                "  publish call: p50 {:.1} us, p99.9 {:.1} us, max {:.1} us; {over_1ms} of {} calls over 1 ms",
+                percentile(&call_us, 0.5),
+                percentile(&call_us, 0.999),
+                call_us.last().copied().unwrap_or(f64::NAN),
+                call_us.len()
             );
             anyhow::Ok(())
         }),

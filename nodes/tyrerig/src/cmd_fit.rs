@@ -43,21 +43,24 @@ pub struct FitArgs {
     pub truth: Option<PathBuf>,
 }
 
-fn read_any(path: &Path) -> Result<mffit::Dataset> {
+/// A data file and the warnings about what it is missing (logs say what they lost).
+fn read_any(path: &Path) -> Result<(mffit::Dataset, Vec<String>)> {
     let ext = path.extension().map(|e| e.to_string_lossy().to_ascii_lowercase()).unwrap_or_default();
     Ok(match ext.as_str() {
-        "tdx" | "tydex" => mffit::tydex::read_tydex(path)?,
-        _ => mffit::logs::read_log(path)?,
+        "tdx" | "tydex" => (mffit::tydex::read_tydex(path)?, Vec::new()),
+        _ => mffit::logs::read_log_with_warnings(path)?,
     })
 }
 
 /// Runs the fit.
 pub fn run(args: FitArgs) -> Result<()> {
     let mut data = mffit::Dataset::default();
+    let mut data_warnings = Vec::new();
     for p in &args.logs {
-        let d = read_any(p).with_context(|| format!("reading {}", p.display()))?;
+        let (d, w) = read_any(p).with_context(|| format!("reading {}", p.display()))?;
         eprintln!("{}: {} segments, {} samples", p.display(), d.segments.len(), d.len());
         data.extend(d);
+        data_warnings.extend(w);
     }
     if data.is_empty() {
         bail!("no data in {:?}", args.logs);
@@ -77,7 +80,10 @@ pub fn run(args: FitArgs) -> Result<()> {
     if let Some(t) = args.threads {
         opts.threads = t.max(1);
     }
-    let result = fit(&data, &opts)?;
+    let mut result = fit(&data, &opts)?;
+    // What the logs are missing heads the warnings (and the report's list of them).
+    data_warnings.append(&mut result.warnings);
+    result.warnings = data_warnings;
     eprintln!("{:<18} {:>6} {:>12} {:>12} {:>6} {:>8}", "stage", "points", "rmse", "start rmse", "iter", "wall s");
     for s in &result.stages {
         match &s.skipped {
