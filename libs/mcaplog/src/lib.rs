@@ -16,6 +16,7 @@
 pub mod codec;
 pub mod log_reader;
 pub mod log_writer;
+pub mod records;
 pub mod recover;
 
 pub use log_reader::{LogError, LogMessage, LogReader, LossSummary, TopicInfo};

@@ -76,40 +76,44 @@ impl LogReader {
     }
 
     /// As [`LogReader::open`], from bytes already in memory (`path` names them in errors).
+    /// Every length the file states is bounded ([`crate::records`]), so a damaged file is an
+    /// error, never an unbounded allocation.
     pub fn from_bytes(path: &Path, bytes: &[u8]) -> Result<Self, LogError> {
+        use crate::records::LogRecord;
         let p = || path.to_owned();
-        let mut messages = Vec::new();
-        let stream = mcap::MessageStream::new_with_options(bytes, mcap::read::Options::ValidateChunkCrcs.into())
-            .map_err(|e| LogError::NotMcap { path: p(), detail: e.to_string() })?;
-        for m in stream {
-            let m = m.map_err(|e| {
-                if messages.is_empty() && !bytes.starts_with(mcap::MAGIC) {
-                    LogError::NotMcap { path: p(), detail: e.to_string() }
-                } else {
-                    LogError::Truncated { path: p(), detail: e.to_string(), messages: messages.len() }
-                }
-            })?;
-            if m.channel.message_encoding != "cdr" {
-                return Err(LogError::Encoding {
-                    path: p(),
-                    topic: m.channel.topic.clone(),
-                    encoding: m.channel.message_encoding.clone(),
-                });
-            }
-            messages.push(LogMessage {
-                topic: m.channel.topic.clone(),
-                ros_type: m.channel.schema.as_ref().map(|s| s.name.clone()).unwrap_or_default(),
-                log_time_ns: m.log_time,
-                publish_time_ns: m.publish_time,
-                data: m.data.into_owned(),
-            });
+        if !bytes.starts_with(mcap::MAGIC) {
+            return Err(LogError::NotMcap { path: p(), detail: "no MCAP magic at the start".into() });
         }
+        let mut messages = Vec::new();
         let mut metadata = BTreeMap::new();
-        for rec in
-            mcap::read::LinearReader::new(bytes).map_err(|e| LogError::NotMcap { path: p(), detail: e.to_string() })?
-        {
-            if let Ok(mcap::records::Record::Metadata(md)) = rec {
-                metadata.insert(md.name, md.metadata);
+        // schema id → ROS type name; channel id → (topic, schema id)
+        let mut schemas: BTreeMap<u16, String> = BTreeMap::new();
+        let mut channels: BTreeMap<u16, (String, String)> = BTreeMap::new();
+        for rec in crate::records::Records::new(bytes) {
+            let rec = rec.map_err(|detail| LogError::Truncated { path: p(), detail, messages: messages.len() })?;
+            match rec {
+                LogRecord::Schema { id, name, .. } => {
+                    schemas.insert(id, name);
+                }
+                LogRecord::Channel { id, schema_id, topic, message_encoding } => {
+                    if message_encoding != "cdr" {
+                        return Err(LogError::Encoding { path: p(), topic, encoding: message_encoding });
+                    }
+                    let ros_type = schemas.get(&schema_id).cloned().unwrap_or_default();
+                    channels.insert(id, (topic, ros_type));
+                }
+                LogRecord::Message { channel_id, log_time, publish_time, data, .. } => {
+                    let (topic, ros_type) = channels.get(&channel_id).cloned().ok_or_else(|| LogError::Truncated {
+                        path: p(),
+                        detail: format!("a message on channel {channel_id}, which was never defined"),
+                        messages: messages.len(),
+                    })?;
+                    messages.push(LogMessage { topic, ros_type, log_time_ns: log_time, publish_time_ns: publish_time, data });
+                }
+                LogRecord::Metadata { name, entries } => {
+                    metadata.insert(name, entries);
+                }
+                LogRecord::Other => {}
             }
         }
         // Chunks are written in log-time order per chunk; sort once so readers see one timeline.

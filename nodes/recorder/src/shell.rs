@@ -22,7 +22,11 @@ use std::{
     time::{Instant, SystemTime},
 };
 use tokio::sync::mpsc;
-use tyre_msgs::{RigSample, RosMessage, builtin_interfaces::Time, diagnostic_msgs::DiagnosticArray};
+use tyre_msgs::{
+    RigSample, RosMessage,
+    builtin_interfaces::Time,
+    diagnostic_msgs::{DiagnosticArray, DiagnosticStatus, KeyValue},
+};
 
 /// Why the recorder stopped with an error.
 #[derive(Debug, thiserror::Error)]
@@ -73,6 +77,56 @@ enum Received {
 
 fn now_ns() -> u64 {
     SystemTime::now().duration_since(SystemTime::UNIX_EPOCH).map(|d| d.as_nanos() as u64).unwrap_or(0)
+}
+
+/// Stream topics (samples, setpoints, thermal states, live channels) flow steadily while their
+/// node lives. One that stops while another still flows means its node has gone (killed, hung):
+/// announced on `/diagnostics` after [`SILENT_AFTER`], and again when it flows once more.
+pub const SILENT_AFTER: std::time::Duration = std::time::Duration::from_millis(500);
+
+#[derive(Debug, Default)]
+struct StreamSilence {
+    /// topic → (last receipt, messages so far, announced silent)
+    topics: BTreeMap<SuiteTopic, (Option<Instant>, u64, bool)>,
+}
+
+impl StreamSilence {
+    fn new(topics: &[SuiteTopic]) -> Self {
+        let topics = topics
+            .iter()
+            .filter(|t| t.spec().qos == node_runtime::Qos::Stream)
+            .map(|t| (*t, (None, 0, false)))
+            .collect();
+        Self { topics }
+    }
+
+    /// Notes a receipt on `topic` at `now`; returns what changed (topic, silent for, true =
+    /// silent / false = back).
+    fn on_message(&mut self, topic: SuiteTopic, now: Instant) -> Vec<(SuiteTopic, f64, bool)> {
+        let mut changes = Vec::new();
+        if let Some((last, n, silent)) = self.topics.get_mut(&topic) {
+            if *silent {
+                changes.push((topic, last.map_or(0.0, |l| now.duration_since(l).as_secs_f64()), false));
+                *silent = false;
+            }
+            *last = Some(now);
+            *n += 1;
+        } else {
+            return changes;
+        }
+        // Another stream still flows: any that stopped (after flowing) has gone silent.
+        for (t, (last, n, silent)) in &mut self.topics {
+            if let Some(l) = last
+                && *n >= 10
+                && !*silent
+                && now.duration_since(*l) >= SILENT_AFTER
+            {
+                *silent = true;
+                changes.push((*t, now.duration_since(*l).as_secs_f64(), true));
+            }
+        }
+        changes
+    }
 }
 
 /// The topics a config selects.
@@ -153,6 +207,8 @@ pub async fn run(mut node: RosNode, cfg: RecorderConfig, shutdown: Shutdown) -> 
     let namespace = node.namespace().to_owned();
     let topic_names: BTreeMap<SuiteTopic, String> = topics.iter().map(|t| (*t, t.full_name(&namespace))).collect();
     let mut watch = LossWatch::new(node.name());
+    let mut silence = StreamSilence::new(&topics);
+    let node_name = node.name().to_owned();
     tracing::info!(output = %output.display(), topics = topics.len(), "recording");
 
     let out_path = output.clone();
@@ -168,6 +224,32 @@ pub async fn run(mut node: RosNode, cfg: RecorderConfig, shutdown: Shutdown) -> 
                     watch.on_message(&topic_names[&topic], &info, message_seq);
                     if publish_time_ns > 0 {
                         stamp = Time::from_nanos(publish_time_ns);
+                    }
+                    let changes = silence.on_message(topic, Instant::now());
+                    if !changes.is_empty() {
+                        let status = changes
+                            .into_iter()
+                            .map(|(t, silent_s, silent)| {
+                                let name = &topic_names[&t];
+                                let message = if silent {
+                                    format!("{name}: silent for {silent_s:.1} s while other streams flow (its node stopped?)")
+                                } else {
+                                    format!("{name}: flowing again after {silent_s:.1} s")
+                                };
+                                tracing::warn!("{message}");
+                                DiagnosticStatus {
+                                    level: if silent { DiagnosticStatus::ERROR } else { DiagnosticStatus::WARN },
+                                    name: format!("{node_name}: stream_silent"),
+                                    message,
+                                    hardware_id: "dds".into(),
+                                    values: vec![KeyValue { key: "topic".into(), value: name.clone() }],
+                                }
+                            })
+                            .collect();
+                        let d = DiagnosticArray { header: tyre_msgs::std_msgs::Header { stamp, frame_id: String::new() }, status };
+                        if let Err(e) = diagnostics.publish(d) {
+                            tracing::warn!("/diagnostics publish: {e:?}");
+                        }
                     }
                 }
                 Received::Refused { topic, error } => watch.on_read_error(&topic_names[&topic], &error),

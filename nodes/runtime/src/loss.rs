@@ -69,14 +69,14 @@ impl LossWatch {
         if dds_seq >= 0
             && let Observation::Gap(g) = self.ledger.observe(topic, writer, SeqSource::Dds, dds_seq as u64)
         {
-            tracing::warn!(topic, writer = format!("{writer:032x}"), "lost {} message(s): DDS seq {g}", g.len());
+            tracing::warn!("{}: lost {} message(s) on {topic} from writer {writer:032x}: DDS seq {g}", self.node, g.len());
             self.note(format!("{topic}: {} lost (DDS seq {g})", g.len()));
             gap = true;
         }
         if let Some(seq) = message_seq
             && let Observation::Gap(g) = self.ledger.observe(topic, writer, SeqSource::Message, seq)
         {
-            tracing::warn!(topic, "{} sample(s) missing: seq {g}", g.len());
+            tracing::warn!("{}: {} sample(s) missing on {topic}: seq {g}", self.node, g.len());
             self.note(format!("{topic}: {} missing (seq {g})", g.len()));
             gap = true;
         }
@@ -92,11 +92,11 @@ impl LossWatch {
                 // fill the log.
                 if self.malformed_logged < 10 || n.is_multiple_of(1000) {
                     self.malformed_logged += 1;
-                    tracing::warn!(topic, count = n, "malformed message refused: {reason}");
+                    tracing::warn!("{}: malformed message on {topic} refused ({n} so far): {reason}", self.node);
                 }
                 self.note(format!("{topic}: malformed message refused ({n} so far)"));
             }
-            other => tracing::warn!(topic, "receive error: {other:?}"),
+            other => tracing::warn!("{}: receive error on {topic}: {other:?}", self.node),
         }
     }
 

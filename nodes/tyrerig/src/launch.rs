@@ -233,7 +233,7 @@ mod tests {
             .map(|n| std::fs::read(launch_config().join(n)).expect("seed launch file"))
             .to_vec();
         let at = launch_config().join("fuzz.toml");
-        let cases = std::env::var("FUZZ_CASES").ok().and_then(|v| v.parse().ok()).unwrap_or(400);
+        let cases = std::env::var("FUZZ_CASES").ok().and_then(|v| v.parse().ok()).unwrap_or(2000);
         parser_fuzz::fuzz("launch TOML", seeds, cases, |b| {
             LaunchFile::parse(&at, &parser_fuzz::text(b)).map(|_| ()).map_err(|e| format!("{e:#}"))
         });

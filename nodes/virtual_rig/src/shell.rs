@@ -40,6 +40,9 @@ pub struct VirtualRigNodeConfig {
     /// Noise seed (default: the config's).
     #[serde(default)]
     pub seed: Option<u64>,
+    /// RigSample rate replacing the config's (e.g. 1000 for a 1 kHz rig) [Hz].
+    #[serde(default)]
+    pub publish_rate_hz: Option<u32>,
     #[serde(default = "default_clock")]
     pub clock: ClockMode,
     /// Lockstep: how long to wait for the sequencer's answer before going on [s of wall time].
@@ -62,7 +65,7 @@ pub struct VirtualRigNodeConfig {
 }
 
 fn default_setpoint_timeout() -> f64 {
-    1.0
+    0.5
 }
 
 /// What the rig's watchdog holds: the last setpoint without slip (load, speed, pressure and
@@ -135,6 +138,10 @@ pub fn build_rig(cfg: &VirtualRigNodeConfig) -> Result<VirtualRig, VirtualRigNod
     let mut rc = RigConfig::load(&cfg.rig_config).map_err(|e| VirtualRigNodeError::Rig(e.to_string()))?;
     if let Some(t) = &cfg.tyre {
         rc.tyre_file = t.clone();
+    }
+    if let Some(r) = cfg.publish_rate_hz {
+        rc.publish_rate_hz = r;
+        rc.validate().map_err(|(key, detail)| VirtualRigNodeError::Rig(format!("publish_rate_hz: {key}: {detail}")))?;
     }
     if let Some(e) = &cfg.effects {
         rc.effects = rigsim::Effects::parse(e).map_err(|e| VirtualRigNodeError::Rig(format!("effects: {e}")))?;

@@ -206,6 +206,7 @@ pub fn text(bytes: &[u8]) -> std::borrow::Cow<'_, str> {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use proptest::strategy::ValueTree;
 
     #[test]
     fn a_panicking_parser_is_caught() {

@@ -15,6 +15,9 @@ fn read(rel: &str) -> Vec<u8> {
     std::fs::read(repo().join(rel)).unwrap_or_else(|e| panic!("{rel}: {e}"))
 }
 
+/// Cases per parser in CI: 2,000 each, about 10 s for all of them on two cores.
+const BUDGET: u32 = 2000;
+
 /// The budget, unless `FUZZ_CASES` says otherwise.
 fn cases(default: u32) -> u32 {
     std::env::var("FUZZ_CASES").ok().and_then(|v| v.parse().ok()).unwrap_or(default)
@@ -29,7 +32,7 @@ fn tir_files() {
     let seeds = ["MagicFormula61_Parameters.tir", "FSAE_Defaults.tir", "PacejkaBook_Defaults.tir"]
         .map(|f| read(&format!("launch-config/tyres/{f}")))
         .to_vec();
-    fuzz("tir", seeds, cases(1500), |b| {
+    fuzz("tir", seeds, cases(BUDGET), |b| {
         let p = mftyre::TyreParams::from_tir_str(&text(b), "fuzz.tir").map_err(err)?;
         p.validate().map_err(err)
     });
@@ -40,7 +43,7 @@ fn procedure_files() {
     let dir = repo().join("launch-config/procedures");
     let names = ["gs2mf_freerolling.toml", "gs2mf_brkdrv.toml", "gs2mf_staticlong.toml", "square_matrix.toml"];
     let seeds = names.map(|f| read(&format!("launch-config/procedures/{f}"))).to_vec();
-    fuzz("procedure TOML (parse + expand)", seeds, cases(400), |b| {
+    fuzz("procedure TOML (parse + expand)", seeds, cases(BUDGET), |b| {
         // Includes resolve to the shipped files; the fuzzed file is the one being parsed.
         let mut include = |p: &str| {
             let name = Path::new(p).file_name().map(|n| dir.join(n)).unwrap_or_default();
@@ -62,28 +65,28 @@ fn node_config_tables() {
     let chan = toml::to_string(&channels::ChannelsConfig::default()).expect("channels toml");
     let mon = toml::to_string(&monitor::MonitorConfig::default()).expect("monitor toml");
     let quality = toml::to_string(&monitor::shell::QualityNodeConfig::default()).expect("quality toml");
-    fuzz("thermal config TOML", vec![thermal.into_bytes()], cases(300), |b| {
+    fuzz("thermal config TOML", vec![thermal.into_bytes()], cases(BUDGET), |b| {
         thermal::ThermalConfig::from_toml_str(&text(b)).map(|_| ()).map_err(err)
     });
-    fuzz("sequencer config TOML", vec![seq.into_bytes()], cases(300), |b| {
+    fuzz("sequencer config TOML", vec![seq.into_bytes()], cases(BUDGET), |b| {
         sequencer::SequencerConfig::from_toml(&text(b)).map(|_| ()).map_err(err)
     });
-    fuzz("channels config TOML", vec![chan.into_bytes()], cases(300), |b| {
+    fuzz("channels config TOML", vec![chan.into_bytes()], cases(BUDGET), |b| {
         channels::ChannelsConfig::from_toml(&text(b)).map(|_| ()).map_err(err)
     });
-    fuzz("monitor config TOML", vec![mon.into_bytes()], cases(300), |b| {
+    fuzz("monitor config TOML", vec![mon.into_bytes()], cases(BUDGET), |b| {
         monitor::MonitorConfig::from_toml(&text(b)).map(|_| ()).map_err(err)
     });
-    fuzz("quality node config TOML", vec![quality.into_bytes()], cases(300), |b| {
+    fuzz("quality node config TOML", vec![quality.into_bytes()], cases(BUDGET), |b| {
         let c: monitor::shell::QualityNodeConfig = toml::from_str(&text(b)).map_err(err)?;
         c.validate().map_err(err)
     });
-    fuzz("recorder config TOML", vec![b"output = \"out/run.mcap\"\ntopics = [\"sample\"]\nflush_interval_s = 0.5\nzstd_level = 3\nchunk_size_bytes = 4096\non_existing = \"new_file\"\n[metadata.tyre]\nname = \"x\"\n".to_vec()], cases(300), |b| {
+    fuzz("recorder config TOML", vec![b"output = \"out/run.mcap\"\ntopics = [\"sample\"]\nflush_interval_s = 0.5\nzstd_level = 3\nchunk_size_bytes = 4096\non_existing = \"new_file\"\n[metadata.tyre]\nname = \"x\"\n".to_vec()], cases(BUDGET), |b| {
         let c: recorder::RecorderConfig = toml::from_str(&text(b)).map_err(err)?;
         c.validate().map_err(err)?;
         recorder::shell::selected_topics(&c, "/rig").map(|_| ()).map_err(err)
     });
-    fuzz("runtime config TOML", vec![b"namespace = \"/rig\"\ndomain_id = 42\n".to_vec()], cases(300), |b| {
+    fuzz("runtime config TOML", vec![b"namespace = \"/rig\"\ndomain_id = 42\n".to_vec()], cases(BUDGET), |b| {
         let c: node_runtime::RuntimeConfig = toml::from_str(&text(b)).map_err(err)?;
         c.validate().map_err(err)
     });
@@ -91,7 +94,7 @@ fn node_config_tables() {
 
 #[test]
 fn virtual_rig_config() {
-    fuzz("virtual rig config TOML", vec![read("launch-config/virtual_rig.toml")], cases(300), |b| {
+    fuzz("virtual rig config TOML", vec![read("launch-config/virtual_rig.toml")], cases(BUDGET), |b| {
         rigsim::RigConfig::from_toml_str(&text(b), "fuzz.toml").map(|_| ()).map_err(err)
     });
 }
@@ -129,12 +132,12 @@ fn tiny_dataset() -> mffit::Dataset {
 fn tydex_and_ttc() {
     let data = tiny_dataset();
     let tydex = mffit::tydex::to_tydex(&data, "fuzz").into_bytes();
-    fuzz("TYDEX", vec![tydex], cases(800), |b| {
+    fuzz("TYDEX", vec![tydex], cases(BUDGET), |b| {
         mffit::tydex::parse_tydex(&text(b), Path::new("fuzz.tdx")).map(|_| ()).map_err(err)
     });
     for conv in [mffit::tydex::Convention::Sae, mffit::tydex::Convention::IsoW] {
         let ttc = mffit::tydex::to_ttc(&data, conv).into_bytes();
-        fuzz(&format!("TTC ({conv:?})"), vec![ttc], cases(400), |b| {
+        fuzz(&format!("TTC ({conv:?})"), vec![ttc], cases(BUDGET), |b| {
             mffit::tydex::parse_ttc(&text(b), Path::new("fuzz.dat"), conv).map(|_| ()).map_err(err)
         });
     }
@@ -169,7 +172,7 @@ fn small_log(dir: &Path) -> Vec<u8> {
 fn mcap_reading() {
     let dir = tempfile::tempdir().expect("tempdir");
     let seed = small_log(dir.path());
-    fuzz("MCAP read (LogReader + typed + loss summary)", vec![seed], cases(600), |b| {
+    fuzz("MCAP read (LogReader + typed + loss summary)", vec![seed], cases(BUDGET), |b| {
         let log = mcaplog::LogReader::from_bytes(Path::new("fuzz.mcap"), b).map_err(err)?;
         for t in log.topics() {
             if t.ros_type == "tyre_msgs/msg/RigSample" {
@@ -186,7 +189,7 @@ fn mcap_recovery() {
     let dir = tempfile::tempdir().expect("tempdir");
     let seed = small_log(dir.path());
     let (input, output) = (dir.path().join("in.mcap"), dir.path().join("out.mcap"));
-    fuzz("MCAP recover", vec![seed], cases(300), |b| {
+    fuzz("MCAP recover", vec![seed], cases(BUDGET), |b| {
         std::fs::write(&input, b).map_err(err)?;
         mcaplog::recover(&input, &output).map_err(err)?;
         // Whatever recovery keeps must be a valid log.
@@ -206,7 +209,7 @@ fn checkpoint_json() {
         running.step(f64::from(i) * 0.01, None, None);
     }
     let seed = serde_json::to_vec_pretty(&running.checkpoint()).expect("json");
-    fuzz("checkpoint JSON (parse + resume + run)", vec![seed], cases(400), |b| {
+    fuzz("checkpoint JSON (parse + resume + run)", vec![seed], cases(BUDGET), |b| {
         let cp: sequencer::Checkpoint = serde_json::from_slice(b).map_err(err)?;
         let mut s = sequencer::Sequencer::resume(plan.clone(), cfg, &cp).map_err(err)?;
         let _ = s.on_command(0.0, &start);
@@ -226,7 +229,7 @@ fn loss_record() {
     ledger.malformed("/rig/sample");
     let entries = ledger.report(true).to_entries();
     let seed = entries.iter().map(|(k, v)| format!("{k}\t{v}\n")).collect::<String>().into_bytes();
-    fuzz("loss record (MCAP metadata)", vec![seed], cases(500), |b| {
+    fuzz("loss record (MCAP metadata)", vec![seed], cases(BUDGET), |b| {
         let entries = text(b)
             .lines()
             .filter_map(|l| l.split_once('\t'))
