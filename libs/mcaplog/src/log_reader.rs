@@ -108,7 +108,13 @@ impl LogReader {
                         detail: format!("a message on channel {channel_id}, which was never defined"),
                         messages: messages.len(),
                     })?;
-                    messages.push(LogMessage { topic, ros_type, log_time_ns: log_time, publish_time_ns: publish_time, data });
+                    messages.push(LogMessage {
+                        topic,
+                        ros_type,
+                        log_time_ns: log_time,
+                        publish_time_ns: publish_time,
+                        data,
+                    });
                 }
                 LogRecord::Metadata { name, entries } => {
                     metadata.insert(name, entries);
@@ -156,7 +162,9 @@ impl LogReader {
     pub fn loss_summary(&self) -> LossSummary {
         let mut out = LossSummary { clean: true, lines: Vec::new() };
         match self.loss_report() {
-            None => out.lines.push("loss: no tyrerig.loss record (a headless run, an import or an older recorder)".into()),
+            None => {
+                out.lines.push("loss: no tyrerig.loss record (a headless run, an import or an older recorder)".into())
+            }
             Some(Err(e)) => {
                 out.clean = false;
                 out.lines.push(format!("loss: {e}"));

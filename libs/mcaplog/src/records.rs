@@ -22,10 +22,29 @@ pub fn record_length_limit(file_len: usize) -> usize {
 /// A record of a suite log.
 #[derive(Debug, Clone, PartialEq)]
 pub enum LogRecord {
-    Schema { id: u16, name: String, encoding: String, data: Vec<u8> },
-    Channel { id: u16, schema_id: u16, topic: String, message_encoding: String },
-    Message { channel_id: u16, sequence: u32, log_time: u64, publish_time: u64, data: Vec<u8> },
-    Metadata { name: String, entries: BTreeMap<String, String> },
+    Schema {
+        id: u16,
+        name: String,
+        encoding: String,
+        data: Vec<u8>,
+    },
+    Channel {
+        id: u16,
+        schema_id: u16,
+        topic: String,
+        message_encoding: String,
+    },
+    Message {
+        channel_id: u16,
+        sequence: u32,
+        log_time: u64,
+        publish_time: u64,
+        data: Vec<u8>,
+    },
+    Metadata {
+        name: String,
+        entries: BTreeMap<String, String>,
+    },
     /// Any other record (header, indexes, statistics, attachments, footer…).
     Other,
 }

@@ -245,7 +245,9 @@ mod tests {
         let lines = sample_ledger().report(true).summary_lines();
         assert_eq!(
             lines,
-            ["/rig/sample: lost 14 of 20 in 2 gap(s), 14 missing by the message counter, 1 malformed message(s) refused"]
+            [
+                "/rig/sample: lost 14 of 20 in 2 gap(s), 14 missing by the message counter, 1 malformed message(s) refused"
+            ]
         );
         assert!(LossLedger::new().report(true).summary_lines().is_empty());
         assert!(LossLedger::new().report(true).is_clean());

@@ -221,7 +221,11 @@ pub async fn run(mut node: RosNode, cfg: RecorderConfig, shutdown: Shutdown) -> 
             match r {
                 Received::Message { topic, log_time_ns, publish_time_ns, data, info, message_seq } => {
                     log.write(channel_ids[&topic], log_time_ns, publish_time_ns, &data)?;
-                    watch.on_message(&topic_names[&topic], &info, message_seq);
+                    // `/clock` is best effort by ROS convention: dropping a tick is its contract,
+                    // not loss.
+                    if topic.spec().qos != node_runtime::Qos::Clock {
+                        watch.on_message(&topic_names[&topic], &info, message_seq);
+                    }
                     if publish_time_ns > 0 {
                         stamp = Time::from_nanos(publish_time_ns);
                     }
@@ -246,7 +250,10 @@ pub async fn run(mut node: RosNode, cfg: RecorderConfig, shutdown: Shutdown) -> 
                                 }
                             })
                             .collect();
-                        let d = DiagnosticArray { header: tyre_msgs::std_msgs::Header { stamp, frame_id: String::new() }, status };
+                        let d = DiagnosticArray {
+                            header: tyre_msgs::std_msgs::Header { stamp, frame_id: String::new() },
+                            status,
+                        };
                         if let Err(e) = diagnostics.publish(d) {
                             tracing::warn!("/diagnostics publish: {e:?}");
                         }
@@ -263,7 +270,8 @@ pub async fn run(mut node: RosNode, cfg: RecorderConfig, shutdown: Shutdown) -> 
             // The log says what it is missing while the loss happens, not only at the end.
             let ledger = watch.ledger();
             let seen = ledger.lost_total().saturating_add(ledger.malformed_total());
-            if seen != loss_seen && loss_written_at.is_none_or(|t| now.duration_since(t) >= node_runtime::loss::ANNOUNCE_EVERY)
+            if seen != loss_seen
+                && loss_written_at.is_none_or(|t| now.duration_since(t) >= node_runtime::loss::ANNOUNCE_EVERY)
             {
                 log.write_metadata(streamloss::LOSS_RECORD, &ledger.report(false).to_entries())?;
                 loss_written_at = Some(now);

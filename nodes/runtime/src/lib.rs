@@ -21,8 +21,8 @@ pub mod node;
 pub mod shutdown;
 pub mod topics;
 
-pub use loss::LossWatch;
 pub use config::{RuntimeConfig, RuntimeConfigError};
+pub use loss::LossWatch;
 pub use node::{RosNode, RuntimeError};
 pub use shutdown::Shutdown;
 pub use topics::{Qos, SuiteTopic, TopicSpec};

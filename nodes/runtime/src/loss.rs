@@ -36,8 +36,6 @@ pub struct LossWatch {
     notes: Vec<String>,
     notes_dropped: u64,
     last_announce: Option<Instant>,
-    /// Malformed messages logged one by one before the log goes quiet (counts continue).
-    malformed_logged: u64,
 }
 
 impl LossWatch {
@@ -48,7 +46,6 @@ impl LossWatch {
             notes: Vec::new(),
             notes_dropped: 0,
             last_announce: None,
-            malformed_logged: 0,
         }
     }
 
@@ -69,7 +66,11 @@ impl LossWatch {
         if dds_seq >= 0
             && let Observation::Gap(g) = self.ledger.observe(topic, writer, SeqSource::Dds, dds_seq as u64)
         {
-            tracing::warn!("{}: lost {} message(s) on {topic} from writer {writer:032x}: DDS seq {g}", self.node, g.len());
+            tracing::warn!(
+                "{}: lost {} message(s) on {topic} from writer {writer:032x}: DDS seq {g}",
+                self.node,
+                g.len()
+            );
             self.note(format!("{topic}: {} lost (DDS seq {g})", g.len()));
             gap = true;
         }
@@ -88,10 +89,9 @@ impl LossWatch {
         match error {
             ReadError::Deserialization { reason } => {
                 let n = self.ledger.malformed(topic);
-                // The first few are logged in full; then every 1000th, so a hostile peer cannot
-                // fill the log.
-                if self.malformed_logged < 10 || n.is_multiple_of(1000) {
-                    self.malformed_logged += 1;
+                // The first few per topic are logged in full; then every 1000th, so a hostile
+                // peer cannot fill the log.
+                if n <= 5 || n.is_multiple_of(1000) {
                     tracing::warn!("{}: malformed message on {topic} refused ({n} so far): {reason}", self.node);
                 }
                 self.note(format!("{topic}: malformed message refused ({n} so far)"));

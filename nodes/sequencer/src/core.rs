@@ -541,7 +541,8 @@ impl Sequencer {
             if hold.mode == RigMode::Static {
                 hold.mode = RigMode::FreeRolling;
             }
-            self.state = State::Paused { hold: Box::new(Trajectory::Keyframes(Keyframes::start(hold))), t0: now_s, was: run };
+            self.state =
+                State::Paused { hold: Box::new(Trajectory::Keyframes(Keyframes::start(hold))), t0: now_s, was: run };
             self.fault_hold = true;
             out.events.push(SequencerEvent::RigSilent { silent_s, estop: false });
             out.events.push(SequencerEvent::Paused);

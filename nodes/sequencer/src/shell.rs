@@ -200,7 +200,10 @@ pub async fn run(mut node: RosNode, cfg: SequencerNodeConfig, shutdown: Shutdown
             for st in &statuses {
                 tracing::warn!("{}: {}", st.name, st.message);
             }
-            let header = Header { stamp: tyre_msgs::builtin_interfaces::Time::from_secs_f64(rig_time_s.unwrap_or(0.0)), frame_id: String::new() };
+            let header = Header {
+                stamp: tyre_msgs::builtin_interfaces::Time::from_secs_f64(rig_time_s.unwrap_or(0.0)),
+                frame_id: String::new(),
+            };
             let _ = diag_pub.publish(DiagnosticArray { header, status: statuses });
         }
         let mut done = false;

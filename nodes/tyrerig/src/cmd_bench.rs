@@ -262,7 +262,12 @@ struct Arrivals {
     setpoint_ns: Vec<(u64, i64)>,
 }
 
-async fn suite_latency(rate_hz: u32, seconds: f64, processes: bool, launch_config: &std::path::Path) -> anyhow::Result<()> {
+async fn suite_latency(
+    rate_hz: u32,
+    seconds: f64,
+    processes: bool,
+    launch_config: &std::path::Path,
+) -> anyhow::Result<()> {
     use tyre_msgs::{LiveChannels, RigSetpoint, ThermalState};
     let dir = std::env::temp_dir().join(format!("tyrerig-latency-{}", std::process::id()));
     std::fs::create_dir_all(&dir)?;

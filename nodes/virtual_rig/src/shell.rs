@@ -180,7 +180,8 @@ pub async fn run(mut node: RosNode, cfg: VirtualRigNodeConfig, shutdown: Shutdow
             hardware_id: "virtual rig".into(),
             values: Vec::new(),
         };
-        let _ = diagnostics.publish(DiagnosticArray { header: Header { stamp, frame_id: String::new() }, status: vec![status] });
+        let _ = diagnostics
+            .publish(DiagnosticArray { header: Header { stamp, frame_id: String::new() }, status: vec![status] });
     };
     // A reliable writer whose history is full (a slow subscriber) reports WouldBlock after its
     // wait: that is back-pressure, not a fault — the rig holds the sample and tries again, and
@@ -273,8 +274,16 @@ pub async fn run(mut node: RosNode, cfg: VirtualRigNodeConfig, shutdown: Shutdow
                         }
                     }
                 }
-                if !answered && !holding && !shutdown.is_triggered() && let Some((sp, _)) = &last_setpoint {
-                    let why = format!("no answer to the sample at {:.3} s within {} s", t.as_secs_f64(), cfg.lockstep_timeout_s);
+                if !answered
+                    && !holding
+                    && !shutdown.is_triggered()
+                    && let Some((sp, _)) = &last_setpoint
+                {
+                    let why = format!(
+                        "no answer to the sample at {:.3} s within {} s",
+                        t.as_secs_f64(),
+                        cfg.lockstep_timeout_s
+                    );
                     hold(&mut rig, sp, &why, t);
                     holding = true;
                 }

@@ -20,9 +20,39 @@ use std::sync::atomic::{AtomicU64, Ordering};
 /// Tokens that break parsers: non-finite and extreme numbers, integer overflows, structure
 /// characters, control and multi-byte characters.
 pub const HOSTILE_TOKENS: &[&str] = &[
-    "NaN", "nan", "inf", "-inf", "1e308", "-1e308", "1e-320", "-0", "0", "18446744073709551616",
-    "9223372036854775807", "-9223372036854775808", "4294967296", "-1", "\"", "'", "[", "]", "{", "}",
-    "=", "\n", "\r\n", "\t", "\0", "é", "#", ",", "$", "[[", "]]", "\"\"\"", "999999999999",
+    "NaN",
+    "nan",
+    "inf",
+    "-inf",
+    "1e308",
+    "-1e308",
+    "1e-320",
+    "-0",
+    "0",
+    "18446744073709551616",
+    "9223372036854775807",
+    "-9223372036854775808",
+    "4294967296",
+    "-1",
+    "\"",
+    "'",
+    "[",
+    "]",
+    "{",
+    "}",
+    "=",
+    "\n",
+    "\r\n",
+    "\t",
+    "\0",
+    "é",
+    "#",
+    ",",
+    "$",
+    "[[",
+    "]]",
+    "\"\"\"",
+    "999999999999",
 ];
 
 /// One way to damage an input. Positions are [`proptest::sample::Index`]es, resolved against the
@@ -112,9 +142,9 @@ pub fn cap_memory(headroom_bytes: u64) {
         let vm_bytes = std::fs::read_to_string("/proc/self/status")
             .ok()
             .and_then(|s| {
-                s.lines().find(|l| l.starts_with("VmSize:")).and_then(|l| {
-                    l.split_whitespace().nth(1).and_then(|kb| kb.parse::<u64>().ok()).map(|kb| kb * 1024)
-                })
+                s.lines()
+                    .find(|l| l.starts_with("VmSize:"))
+                    .and_then(|l| l.split_whitespace().nth(1).and_then(|kb| kb.parse::<u64>().ok()).map(|kb| kb * 1024))
             })
             .unwrap_or(0);
         let limit = rustix::process::Rlimit { current: Some(vm_bytes + headroom_bytes), maximum: None };
@@ -130,12 +160,7 @@ pub const MEMORY_HEADROOM_BYTES: u64 = 3 << 30;
 /// Fuzzes `parse` with `cases` mutated copies of `seeds` (each also tried unmutated first).
 /// `parse` returns `Err(message)` for an input it refuses; the message must say something.
 /// Panics (failing the test) on the first input that makes `parse` panic or refuse in silence.
-pub fn fuzz(
-    name: &str,
-    seeds: Vec<Vec<u8>>,
-    cases: u32,
-    parse: impl Fn(&[u8]) -> Result<(), String>,
-) -> FuzzStats {
+pub fn fuzz(name: &str, seeds: Vec<Vec<u8>>, cases: u32, parse: impl Fn(&[u8]) -> Result<(), String>) -> FuzzStats {
     assert!(!seeds.is_empty(), "{name}: no seeds");
     cap_memory(MEMORY_HEADROOM_BYTES);
     for (i, seed) in seeds.iter().enumerate() {
@@ -193,7 +218,10 @@ pub fn fuzz(
         accepted: accepted.into_inner(),
         refused: refused.into_inner(),
     };
-    println!("fuzz {}: {} cases, {} accepted, {} refused with an error, 0 panics", name, cases, stats.accepted, stats.refused);
+    println!(
+        "fuzz {}: {} cases, {} accepted, {} refused with an error, 0 panics",
+        name, cases, stats.accepted, stats.refused
+    );
     stats
 }
 
@@ -223,7 +251,9 @@ mod tests {
 
     #[test]
     fn a_silent_refusal_is_caught() {
-        let r = std::panic::catch_unwind(|| fuzz("silent", vec![b"ok".to_vec()], 64, |b| if b == b"ok" { Ok(()) } else { Err(String::new()) }));
+        let r = std::panic::catch_unwind(|| {
+            fuzz("silent", vec![b"ok".to_vec()], 64, |b| if b == b"ok" { Ok(()) } else { Err(String::new()) })
+        });
         assert!(r.is_err());
     }
 

@@ -230,11 +230,8 @@ fn loss_record() {
     let entries = ledger.report(true).to_entries();
     let seed = entries.iter().map(|(k, v)| format!("{k}\t{v}\n")).collect::<String>().into_bytes();
     fuzz("loss record (MCAP metadata)", vec![seed], cases(BUDGET), |b| {
-        let entries = text(b)
-            .lines()
-            .filter_map(|l| l.split_once('\t'))
-            .map(|(k, v)| (k.to_owned(), v.to_owned()))
-            .collect();
+        let entries =
+            text(b).lines().filter_map(|l| l.split_once('\t')).map(|(k, v)| (k.to_owned(), v.to_owned())).collect();
         streamloss::LossReport::from_entries(&entries).map(|r| drop(r.summary_lines())).map_err(err)
     });
 }
