@@ -38,10 +38,15 @@ impl Qos {
     /// The DDS QoS profile of this preset.
     pub fn profile(self) -> QosProfile {
         let reliable = Reliability::Reliable { when_full: WhenFull::Wait(Duration::from_millis(200)) };
+        // A stream's writer (the rig's samples) never waits more than 1 ms for its send window:
+        // a reader that died without leaving (SIGKILL) holds the window full until its
+        // participant lease ends (~50 s in RustDDS); the sample is then refused, and every
+        // reader sees the gap in its sequence numbers instead of the rig stalling.
+        let stream = Reliability::Reliable { when_full: WhenFull::Wait(Duration::from_millis(1)) };
         let base = QosProfile::publisher_default();
         match self {
             Qos::Stream => {
-                base.reliability(reliable).durability(Durability::Volatile).history(History::KeepLast { depth: 2000 })
+                base.reliability(stream).durability(Durability::Volatile).history(History::KeepLast { depth: 2000 })
             }
             Qos::State => base
                 .reliability(reliable)

@@ -183,15 +183,21 @@ pub async fn run(mut node: RosNode, cfg: VirtualRigNodeConfig, shutdown: Shutdow
         let _ = diagnostics
             .publish(DiagnosticArray { header: Header { stamp, frame_id: String::new() }, status: vec![status] });
     };
-    // A reliable writer whose history is full (a slow subscriber) reports WouldBlock after its
-    // wait: that is back-pressure, not a fault — the rig holds the sample and tries again, and
-    // gives up only after ~10 s of refusals (a subscriber that is gone for good).
+    // A reliable writer whose send window is full (a reader that stopped acknowledging: killed,
+    // stopped, far behind) refuses the sample after at most 1 ms (`Qos::Stream`). The rig never
+    // waits on its readers: the sample is dropped, and every reader sees the gap in
+    // RigSample.seq and reports it.
+    let refused = std::sync::atomic::AtomicU64::new(0);
     let publish = |s: &RigSample| -> Result<(), VirtualRigNodeError> {
-        let mut tries = 0u32;
-        while let Err(e) = samples.publish(s.clone()) {
-            tries += 1;
-            if tries >= 50 {
-                return Err(VirtualRigNodeError::Publish { topic: "sample", detail: format!("{e:?}") });
+        if let Err(e) = samples.publish(s.clone()) {
+            let n = refused.fetch_add(1, std::sync::atomic::Ordering::Relaxed) + 1;
+            if n <= 5 || n.is_multiple_of(1000) {
+                tracing::warn!(
+                    "sample seq {} refused by the writer ({} so far): {}",
+                    s.seq,
+                    n,
+                    format!("{e:?}").chars().take(60).collect::<String>()
+                );
             }
         }
         let _ = clock.publish(Clock { clock: s.header.stamp });
