@@ -5,7 +5,9 @@
 //!   of log time, so a killed writer loses at most that much.
 //! - [`recover`]: turns a file cut short (writer killed, disk full) into a valid MCAP holding
 //!   every message of every complete chunk.
-//! - [`LogReader`]: reads a log back, typed, for replay and the offline tools.
+//! - [`LogReader`]: reads a log back, typed, for replay and the offline tools, and says what it
+//!   is missing ([`LogReader::loss_summary`]: the recorder's `tyrerig.loss` record and the gaps in
+//!   `RigSample.seq`).
 //!
 //! Timestamps: an MCAP message's `log_time` is when the recorder received it (or, in headless
 //! runs, the simulated time it was produced); its `publish_time` is the message's own stamp
@@ -14,8 +16,9 @@
 pub mod codec;
 pub mod log_reader;
 pub mod log_writer;
+pub mod records;
 pub mod recover;
 
-pub use log_reader::{LogError, LogMessage, LogReader, TopicInfo};
+pub use log_reader::{LogError, LogMessage, LogReader, LossSummary, TopicInfo};
 pub use log_writer::{LogWriteError, McapLog, McapLogOptions};
 pub use recover::{RecoverError, RecoveryReport, recover};

@@ -41,6 +41,14 @@ pub struct LogMessage {
     pub data: Vec<u8>,
 }
 
+/// [`LogReader::loss_summary`]: whether anything is missing, and lines saying what.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct LossSummary {
+    /// Nothing lost, nothing malformed, no gap in `RigSample.seq`.
+    pub clean: bool,
+    pub lines: Vec<String>,
+}
+
 /// Per-topic statistics of a log.
 #[derive(Debug, Clone, PartialEq)]
 pub struct TopicInfo {
@@ -68,40 +76,50 @@ impl LogReader {
     }
 
     /// As [`LogReader::open`], from bytes already in memory (`path` names them in errors).
+    /// Every length the file states is bounded ([`crate::records`]), so a damaged file is an
+    /// error, never an unbounded allocation.
     pub fn from_bytes(path: &Path, bytes: &[u8]) -> Result<Self, LogError> {
+        use crate::records::LogRecord;
         let p = || path.to_owned();
-        let mut messages = Vec::new();
-        let stream = mcap::MessageStream::new_with_options(bytes, mcap::read::Options::ValidateChunkCrcs.into())
-            .map_err(|e| LogError::NotMcap { path: p(), detail: e.to_string() })?;
-        for m in stream {
-            let m = m.map_err(|e| {
-                if messages.is_empty() && !bytes.starts_with(mcap::MAGIC) {
-                    LogError::NotMcap { path: p(), detail: e.to_string() }
-                } else {
-                    LogError::Truncated { path: p(), detail: e.to_string(), messages: messages.len() }
-                }
-            })?;
-            if m.channel.message_encoding != "cdr" {
-                return Err(LogError::Encoding {
-                    path: p(),
-                    topic: m.channel.topic.clone(),
-                    encoding: m.channel.message_encoding.clone(),
-                });
-            }
-            messages.push(LogMessage {
-                topic: m.channel.topic.clone(),
-                ros_type: m.channel.schema.as_ref().map(|s| s.name.clone()).unwrap_or_default(),
-                log_time_ns: m.log_time,
-                publish_time_ns: m.publish_time,
-                data: m.data.into_owned(),
-            });
+        if !bytes.starts_with(mcap::MAGIC) {
+            return Err(LogError::NotMcap { path: p(), detail: "no MCAP magic at the start".into() });
         }
+        let mut messages = Vec::new();
         let mut metadata = BTreeMap::new();
-        for rec in
-            mcap::read::LinearReader::new(bytes).map_err(|e| LogError::NotMcap { path: p(), detail: e.to_string() })?
-        {
-            if let Ok(mcap::records::Record::Metadata(md)) = rec {
-                metadata.insert(md.name, md.metadata);
+        // schema id → ROS type name; channel id → (topic, schema id)
+        let mut schemas: BTreeMap<u16, String> = BTreeMap::new();
+        let mut channels: BTreeMap<u16, (String, String)> = BTreeMap::new();
+        for rec in crate::records::Records::new(bytes) {
+            let rec = rec.map_err(|detail| LogError::Truncated { path: p(), detail, messages: messages.len() })?;
+            match rec {
+                LogRecord::Schema { id, name, .. } => {
+                    schemas.insert(id, name);
+                }
+                LogRecord::Channel { id, schema_id, topic, message_encoding } => {
+                    if message_encoding != "cdr" {
+                        return Err(LogError::Encoding { path: p(), topic, encoding: message_encoding });
+                    }
+                    let ros_type = schemas.get(&schema_id).cloned().unwrap_or_default();
+                    channels.insert(id, (topic, ros_type));
+                }
+                LogRecord::Message { channel_id, log_time, publish_time, data, .. } => {
+                    let (topic, ros_type) = channels.get(&channel_id).cloned().ok_or_else(|| LogError::Truncated {
+                        path: p(),
+                        detail: format!("a message on channel {channel_id}, which was never defined"),
+                        messages: messages.len(),
+                    })?;
+                    messages.push(LogMessage {
+                        topic,
+                        ros_type,
+                        log_time_ns: log_time,
+                        publish_time_ns: publish_time,
+                        data,
+                    });
+                }
+                LogRecord::Metadata { name, entries } => {
+                    metadata.insert(name, entries);
+                }
+                LogRecord::Other => {}
             }
         }
         // Chunks are written in log-time order per chunk; sort once so readers see one timeline.
@@ -121,6 +139,71 @@ impl LogReader {
     /// Metadata records by name (`tyrerig`, `tyre`, `procedure`, …).
     pub fn metadata(&self) -> &BTreeMap<String, BTreeMap<String, String>> {
         &self.metadata
+    }
+
+    /// What the recorder lost, from its `tyrerig.loss` record: `None` when the log has none
+    /// (headless runs, imports, older recorders).
+    pub fn loss_report(&self) -> Option<Result<streamloss::LossReport, streamloss::RecordError>> {
+        self.metadata.get(streamloss::LOSS_RECORD).map(streamloss::LossReport::from_entries)
+    }
+
+    /// The gaps in `RigSample.seq` on `topic`, read from the messages themselves (independent of
+    /// the recorder's own count, and available for every log): (samples, gaps, missing).
+    pub fn sample_seq_gaps(&self, topic: &str) -> Result<(u64, Vec<streamloss::Gap>, u64), LogError> {
+        let mut tracker = streamloss::SeqTracker::new();
+        for (_, s) in self.typed::<tyre_msgs::RigSample>(topic)? {
+            tracker.observe(s.seq);
+        }
+        Ok((tracker.received(), tracker.gaps().to_vec(), tracker.lost()))
+    }
+
+    /// What the log says it is missing, for people: the recorder's own tally (`tyrerig.loss`)
+    /// and, for every RigSample topic, the gaps in `RigSample.seq` read from the messages.
+    pub fn loss_summary(&self) -> LossSummary {
+        let mut out = LossSummary { clean: true, lines: Vec::new() };
+        match self.loss_report() {
+            None => {
+                out.lines.push("loss: no tyrerig.loss record (a headless run, an import or an older recorder)".into())
+            }
+            Some(Err(e)) => {
+                out.clean = false;
+                out.lines.push(format!("loss: {e}"));
+            }
+            Some(Ok(r)) => {
+                let tally = if r.complete { "final tally" } else { "interim tally: the recorder did not stop cleanly" };
+                if r.is_clean() {
+                    out.lines.push(format!("loss ({tally}): nothing lost, nothing malformed"));
+                } else {
+                    out.clean = false;
+                    out.lines.push(format!(
+                        "loss ({tally}): {} message(s) lost, {} malformed",
+                        r.lost_total(),
+                        r.malformed_total()
+                    ));
+                    out.lines.extend(r.summary_lines().into_iter().map(|l| format!("  {l}")));
+                }
+            }
+        }
+        let sample_type = tyre_msgs::RigSample::ros_type_name();
+        for t in self.topics().into_iter().filter(|t| t.ros_type == sample_type) {
+            match self.sample_seq_gaps(&t.topic) {
+                Ok((n, _, 0)) => out.lines.push(format!("{}: RigSample.seq continuous over {n} samples", t.topic)),
+                Ok((n, gaps, missing)) => {
+                    out.clean = false;
+                    out.lines.push(format!(
+                        "{}: RigSample.seq has {missing} missing in {} gap(s) over {n} samples (first: {})",
+                        t.topic,
+                        gaps.len(),
+                        gaps.iter().take(5).map(ToString::to_string).collect::<Vec<_>>().join(" ")
+                    ));
+                }
+                Err(e) => {
+                    out.clean = false;
+                    out.lines.push(format!("{}: {e}", t.topic));
+                }
+            }
+        }
+        out
     }
 
     /// Topics with their types and message counts, sorted by topic name.

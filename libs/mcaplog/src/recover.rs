@@ -6,7 +6,7 @@
 
 use crate::log_writer::{LogWriteError, McapLog, McapLogOptions};
 use std::{
-    collections::{BTreeMap, HashMap},
+    collections::HashMap,
     path::{Path, PathBuf},
 };
 
@@ -46,48 +46,42 @@ pub fn recover(input: &Path, output: &Path) -> Result<RecoveryReport, RecoverErr
     let mut schemas: HashMap<u16, (String, String)> = HashMap::new(); // id → (name, text)
     let mut channel_map: HashMap<u16, u16> = HashMap::new(); // old id → new id
     let mut report = RecoveryReport { messages: 0, channels: 0, metadata_records: 0, stopped_at: None };
-    let records =
-        match mcap::read::ChunkFlattener::new_with_options(&bytes, mcap::read::Options::ValidateChunkCrcs.into()) {
-            Ok(r) => r,
-            Err(e) => {
-                return Err(RecoverError::Write(LogWriteError::Mcap { path: input.to_owned(), detail: e.to_string() }));
-            }
-        };
+    // Bounded lengths: a damaged length field stops recovery, it cannot exhaust memory.
+    let records = crate::records::Records::new(&bytes);
     for rec in records {
         let rec = match rec {
             Ok(r) => r,
             Err(e) => {
-                report.stopped_at = Some(e.to_string());
+                report.stopped_at = Some(e);
                 break;
             }
         };
-        use mcap::records::Record;
+        use crate::records::LogRecord;
         match rec {
-            Record::Schema { header, data } => {
-                schemas.insert(header.id, (header.name, String::from_utf8_lossy(&data).into_owned()));
+            LogRecord::Schema { id, name, data, .. } => {
+                schemas.insert(id, (name, String::from_utf8_lossy(&data).into_owned()));
             }
-            Record::Channel(ch) => {
-                if channel_map.contains_key(&ch.id) {
+            LogRecord::Channel { id: old_id, schema_id, topic, .. } => {
+                if channel_map.contains_key(&old_id) {
                     continue;
                 }
-                let (name, text) = schemas.get(&ch.schema_id).cloned().unwrap_or_default();
-                let id = out.ensure_channel(&ch.topic, &name, &text)?;
-                channel_map.insert(ch.id, id);
+                let (name, text) = schemas.get(&schema_id).cloned().unwrap_or_default();
+                let id = out.ensure_channel(&topic, &name, &text)?;
+                channel_map.insert(old_id, id);
                 report.channels += 1;
             }
-            Record::Message { header, data } => {
-                if let Some(&id) = channel_map.get(&header.channel_id) {
-                    out.write(id, header.log_time, header.publish_time, &data)?;
+            LogRecord::Message { channel_id, log_time, publish_time, data, .. } => {
+                if let Some(&id) = channel_map.get(&channel_id) {
+                    out.write(id, log_time, publish_time, &data)?;
                     report.messages += 1;
                 }
             }
-            Record::Metadata(md) => {
-                let entries: BTreeMap<String, String> = md.metadata;
-                out.write_metadata(&md.name, &entries)?;
+            LogRecord::Metadata { name, entries } => {
+                out.write_metadata(&name, &entries)?;
                 report.metadata_records += 1;
             }
             // Indexes, statistics and the footer are rebuilt by the writer.
-            _ => {}
+            LogRecord::Other => {}
         }
     }
     out.finish()?;

@@ -87,11 +87,27 @@ fn finish_segment(samples: &mut [Sample]) {
 
 /// Reads one MCAP log into segments.
 pub fn read_log(path: &Path) -> Result<Dataset, FitError> {
+    read_log_with_warnings(path).map(|(d, _)| d)
+}
+
+/// As [`read_log`], with a warning per thing the log says it is missing (lost or malformed
+/// messages, gaps in `RigSample.seq`); the fit report lists them.
+pub fn read_log_with_warnings(path: &Path) -> Result<(Dataset, Vec<String>), FitError> {
     let reader = LogReader::open(path).map_err(|e| log_err(path, e))?;
+    let loss = reader.loss_summary();
+    let warnings = if loss.clean {
+        Vec::new()
+    } else {
+        loss.lines.iter().map(|l| format!("data loss in {}: {}", path.display(), l.trim())).collect()
+    };
+    read_dataset(&reader, path).map(|d| (d, warnings))
+}
+
+fn read_dataset(reader: &LogReader, path: &Path) -> Result<Dataset, FitError> {
     let sample_topic =
-        topic_of::<RigSample>(&reader).ok_or_else(|| log_err(path, "no tyre_msgs/msg/RigSample topic"))?;
+        topic_of::<RigSample>(reader).ok_or_else(|| log_err(path, "no tyre_msgs/msg/RigSample topic"))?;
     let state_topic =
-        topic_of::<ProcedureState>(&reader).ok_or_else(|| log_err(path, "no tyre_msgs/msg/ProcedureState topic"))?;
+        topic_of::<ProcedureState>(reader).ok_or_else(|| log_err(path, "no tyre_msgs/msg/ProcedureState topic"))?;
     let samples = reader.typed::<RigSample>(&sample_topic).map_err(|e| log_err(path, e))?;
     let states = reader.typed::<ProcedureState>(&state_topic).map_err(|e| log_err(path, e))?;
     let md = reader.metadata();

@@ -19,6 +19,7 @@ use crate::derived::{self, DerivedMeasurement, OnCentreClump, Quantity, ZeroCros
 pub use crate::state_queue::FUTURE_STATE_S;
 use crate::state_queue::StateQueue;
 /// Consecutive samples further apart than this are not integrated across (a gap in the data) [s].
+/// A gap in `RigSample.seq` (samples lost on the way) is never integrated across either.
 const MAX_INTEGRATION_GAP_S: f64 = 1.0;
 /// Below this speed the wheel is at a standstill (step-steer, static drag) [m/s].
 const STANDSTILL_MPS: f64 = 0.05;
@@ -258,8 +259,16 @@ impl ReAcc {
 #[derive(Debug, Clone, Copy)]
 struct Prev {
     t: f64,
+    seq: u64,
     p_w: f64,
     vx: f64,
+}
+
+/// `next` follows `prev` without a sample missing between them. A repeated number counts as
+/// continuous (sources without a counter send 0 throughout); a jump either way (samples lost,
+/// or a restarted rig counting from 0 again) is a gap.
+pub fn seq_continuous(prev: u64, next: u64) -> bool {
+    next == prev || next == prev.wrapping_add(1)
 }
 
 /// The channels core. Feed [`ChannelsCore::on_procedure_state`] and
@@ -290,6 +299,8 @@ pub struct ChannelsCore {
     section_key: Option<(String, u32)>,
     out_summaries: Vec<SweepSummary>,
     out_derived: Vec<DerivedMeasurement>,
+    /// Gaps in `RigSample.seq` not integrated across.
+    seq_gaps: u64,
 }
 
 impl ChannelsCore {
@@ -317,7 +328,13 @@ impl ChannelsCore {
             section_key: None,
             out_summaries: Vec::new(),
             out_derived: Vec::new(),
+            seq_gaps: 0,
         })
+    }
+
+    /// Gaps in `RigSample.seq` seen so far (the integrals — sliding energy, LONGDISP — skip them).
+    pub fn seq_gaps(&self) -> u64 {
+        self.seq_gaps
     }
 
     /// The configuration.
@@ -425,14 +442,16 @@ impl ChannelsCore {
         let vx_int = if vx.is_finite() { vx } else { 0.0 };
         if let Some(pr) = self.prev {
             let dt = t - pr.t;
-            if dt > 0.0 && dt <= MAX_INTEGRATION_GAP_S {
+            if !seq_continuous(pr.seq, s.seq) {
+                self.seq_gaps += 1;
+            } else if dt > 0.0 && dt <= MAX_INTEGRATION_GAP_S {
                 let de = 0.5 * (pr.p_w + p_int) * dt;
                 self.acsldeny_j += de;
                 self.total_energy_j += de;
                 self.longdisp_m += 0.5 * (pr.vx + vx_int) * dt;
             }
         }
-        self.prev = Some(Prev { t, p_w: p_int, vx: vx_int });
+        self.prev = Some(Prev { t, seq: s.seq, p_w: p_int, vx: vx_int });
 
         if in_data {
             self.sweep_sample(t, s, sr);

@@ -214,3 +214,33 @@ fn static_drags_give_the_longitudinal_stiffness_averaged_over_repeats() {
     assert_eq!(k[0].n_points, 4);
     assert_relative_eq!(k[0].value, cx, max_relative = 0.03);
 }
+
+/// Samples lost on the way (a jump in `RigSample.seq`) are a gap: the sliding energy and the
+/// travelled distance are not integrated across it, even when the stamps are close together.
+#[test]
+fn a_gap_in_the_sample_counter_is_not_integrated_across() {
+    let run = |lose: bool| {
+        let mut c = ChannelsCore::new(ChannelsConfig::default()).unwrap();
+        c.on_procedure_state(&state(0.0, ProcedureState::PHASE_SWEEP, "long", "Brk_sw1_X_1", 0));
+        let mut last = None;
+        for i in 1..=100u64 {
+            // Samples 41..=60 never arrive; the stamps still advance by 10 ms per sample.
+            if lose && (41..=60).contains(&i) {
+                continue;
+            }
+            let t = i as f64 * 0.01;
+            let mut s = sample(t, i);
+            s.fx_n = 2000.0;
+            s.longslip = 0.1;
+            last = Some(c.on_sample(&s).live);
+        }
+        (last.expect("samples"), c.seq_gaps())
+    };
+    let (whole, gaps) = run(false);
+    assert_eq!(gaps, 0);
+    let (gappy, gaps) = run(true);
+    assert_eq!(gaps, 1);
+    // 99 intervals without loss; with 20 samples lost, 21 intervals are missing, not bridged.
+    assert_relative_eq!(gappy.longdisp_m, whole.longdisp_m * 78.0 / 99.0, epsilon = 1e-9);
+    assert_relative_eq!(gappy.acsldeny_j, whole.acsldeny_j * 78.0 / 99.0, epsilon = 1e-6);
+}

@@ -184,6 +184,8 @@ pub struct Replay {
     pub samples: usize,
     /// Last RUNTIME [s].
     pub end_time_s: f64,
+    /// What the log is missing (`LogReader::loss_summary`), filled by [`run`].
+    pub data_loss: Vec<String>,
 }
 
 /// Replays `inputs` through a fresh pipeline, handing every output to `each` (a test compares
@@ -622,6 +624,12 @@ fn markdown(r: &Replay, log_name: &str, figs: &[(String, String)]) -> String {
                 writeln!(s, "| {:.1} | {} | {} | {} |", a.rig_time_s, a.level, a.check, a.message.replace('|', "\\|"));
         }
     }
+    if !r.data_loss.is_empty() {
+        let _ = writeln!(s, "\n## Data loss\n");
+        for l in &r.data_loss {
+            let _ = writeln!(s, "- {}", l.trim());
+        }
+    }
     let _ = writeln!(s, "\n## Wear\n");
     if let Some(w) = &r.wear {
         let _ = writeln!(
@@ -744,7 +752,8 @@ pub fn run(
     let tyre =
         tyre.or_else(|| tyre_from_metadata(&reader)).ok_or_else(|| ReportError::NoTyre { path: log.to_owned() })?;
     let ins = inputs(&reader)?;
-    let r = replay(&ins, channels_cfg, monitor_cfg, tyre, &mut |_| {})?;
+    let mut r = replay(&ins, channels_cfg, monitor_cfg, tyre, &mut |_| {})?;
+    r.data_loss = reader.loss_summary().lines;
     let name = log.file_name().map_or_else(|| log.display().to_string(), |n| n.to_string_lossy().into_owned());
     let path = write_report(&r, &name, out_dir, format)?;
     Ok((path, r))

@@ -9,7 +9,7 @@
 //! Time is each message's stamp (rig time), never the wall clock.
 
 use futures::StreamExt;
-use node_runtime::{RosNode, RuntimeError, Shutdown, SuiteTopic};
+use node_runtime::{LossWatch, RosNode, RuntimeError, Shutdown, SuiteTopic};
 use tyre_msgs::diagnostic_msgs::DiagnosticArray;
 use tyre_msgs::{DerivedMeasurement, LiveChannels, ProcedureState, QualityReport, RigSample, SweepSummary};
 
@@ -141,20 +141,32 @@ pub async fn run(mut node: RosNode, cfg: QualityNodeConfig, shutdown: Shutdown) 
             let _ = diag_pub.publish(d);
         }
     };
+    let (sample_topic, state_topic) =
+        (node.topic_name(SuiteTopic::RigSample), node.topic_name(SuiteTopic::ProcedureState));
+    let mut loss = LossWatch::new(node.name());
+    let mut stamp = tyre_msgs::builtin_interfaces::Time::default();
     loop {
         tokio::select! {
             _ = shutdown.wait() => break,
             item = states.next() => match item {
-                Some(Ok((st, _))) => p.on_procedure_state(&st),
-                Some(Err(e)) => tracing::warn!("procedure/state: {e:?}"),
+                Some(Ok((st, info))) => {
+                    loss.on_message(&state_topic, &info, None);
+                    p.on_procedure_state(&st)
+                }
+                Some(Err(e)) => loss.on_read_error(&state_topic, &e),
                 None => break,
             },
             item = samples.next() => match item {
-                Some(Ok((s, _))) => publish(p.on_sample(&s), true),
-                Some(Err(e)) => tracing::warn!("sample: {e:?}"),
+                Some(Ok((s, info))) => {
+                    loss.on_message(&sample_topic, &info, Some(s.seq));
+                    stamp = s.header.stamp;
+                    publish(p.on_sample(&s), true)
+                }
+                Some(Err(e)) => loss.on_read_error(&sample_topic, &e),
                 None => break,
             },
         }
+        loss.announce(&diag_pub, stamp);
     }
     // The sweep in progress, the last section's derived measurements and the final verdicts (a
     // recorder still running logs them). The participant lives on briefly so that reliable DDS

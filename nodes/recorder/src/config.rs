@@ -24,6 +24,20 @@ pub struct RecorderConfig {
     /// Extra metadata records: record name → key → value (e.g. `tyre`, `procedure`).
     #[serde(default)]
     pub metadata: BTreeMap<String, BTreeMap<String, String>>,
+    /// What to do when `output` exists already: `overwrite` it (the default, as a rerun of
+    /// `tyrerig run` expects) or record to a `new_file` beside it (`<stem>.1.mcap`, …), so a
+    /// recorder restarted mid-run never destroys the first part of the run.
+    #[serde(default)]
+    pub on_existing: OnExisting,
+}
+
+/// See [`RecorderConfig::on_existing`].
+#[derive(Debug, Clone, Copy, Default, Deserialize, PartialEq, Eq)]
+#[serde(rename_all = "snake_case")]
+pub enum OnExisting {
+    #[default]
+    Overwrite,
+    NewFile,
 }
 
 fn default_chunk_size() -> u64 {
@@ -59,6 +73,7 @@ impl RecorderConfig {
             flush_interval_s: default_flush_interval(),
             zstd_level: default_zstd_level(),
             metadata: BTreeMap::new(),
+            on_existing: OnExisting::Overwrite,
         }
     }
 

@@ -8,17 +8,21 @@
 //!   host discover each other over loopback unicast; one participant never hears itself), with a
 //!   background spinner, typed publishers and subscriptions;
 //! - [`logging`]: `tracing` output with RustDDS's `log` records bridged in and quietened;
-//! - [`shutdown`]: SIGINT/SIGTERM turned into a cooperative shutdown signal.
+//! - [`shutdown`]: SIGINT/SIGTERM turned into a cooperative shutdown signal;
+//! - [`loss`]: per-writer loss and malformed-input accounting every subscriber keeps, with its
+//!   `/diagnostics` announcements.
 //!
 //! Node logic never sees any of this: each node is a pure core driven by its shell.
 
 pub mod config;
 pub mod logging;
+pub mod loss;
 pub mod node;
 pub mod shutdown;
 pub mod topics;
 
 pub use config::{RuntimeConfig, RuntimeConfigError};
+pub use loss::LossWatch;
 pub use node::{RosNode, RuntimeError};
 pub use shutdown::Shutdown;
 pub use topics::{Qos, SuiteTopic, TopicSpec};

@@ -130,6 +130,21 @@ impl RosNode {
         self.node.create_subscription::<M>(&t, Some(qos)).map_err(|e| self.endpoint_err(topic, format!("{e:?}")))
     }
 
+    /// A recorder's subscription: the topic's QoS with the deeper reader history of
+    /// [`crate::Qos::recording_profile`].
+    pub fn recording_subscription<M: RosMessage + 'static>(
+        &mut self,
+        topic: SuiteTopic,
+    ) -> Result<Subscription<M>, RuntimeError> {
+        let (_, name) = self.checked_name::<M>(topic)?;
+        let qos = topic.spec().qos.recording_profile();
+        let t = self
+            .node
+            .create_topic(&name, MessageTypeName::new(M::PACKAGE, M::NAME), &topic.spec().qos.profile())
+            .map_err(|e| self.endpoint_err(topic, format!("{e:?}")))?;
+        self.node.create_subscription::<M>(&t, Some(qos)).map_err(|e| self.endpoint_err(topic, format!("{e:?}")))
+    }
+
     /// The underlying ros2-client node (for graph queries in shells).
     pub fn ros_node(&self) -> &Node {
         &self.node

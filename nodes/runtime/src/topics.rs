@@ -38,10 +38,15 @@ impl Qos {
     /// The DDS QoS profile of this preset.
     pub fn profile(self) -> QosProfile {
         let reliable = Reliability::Reliable { when_full: WhenFull::Wait(Duration::from_millis(200)) };
+        // A stream's writer (the rig's samples) never waits more than 1 ms for its send window:
+        // a reader that died without leaving (SIGKILL) holds the window full until its
+        // participant lease ends (~50 s in RustDDS); the sample is then refused, and every
+        // reader sees the gap in its sequence numbers instead of the rig stalling.
+        let stream = Reliability::Reliable { when_full: WhenFull::Wait(Duration::from_millis(1)) };
         let base = QosProfile::publisher_default();
         match self {
             Qos::Stream => {
-                base.reliability(reliable).durability(Durability::Volatile).history(History::KeepLast { depth: 2000 })
+                base.reliability(stream).durability(Durability::Volatile).history(History::KeepLast { depth: 2000 })
             }
             Qos::State => base
                 .reliability(reliable)
@@ -61,6 +66,22 @@ impl Qos {
             Qos::Diagnostics => {
                 base.reliability(reliable).durability(Durability::Volatile).history(History::KeepLast { depth: 10 })
             }
+        }
+    }
+}
+
+/// Reader history of a recorder on a [`Qos::Stream`] topic [samples]. The recorder's reader
+/// is the one that must never drop: its history is where samples wait while the writer thread
+/// compresses a chunk, so it is far deeper than the stream's (100 s at 1 kHz, ~40 MB of
+/// RigSamples at most). History depth is a reader-local setting; it does not affect matching.
+pub const RECORDER_STREAM_DEPTH: usize = 100_000;
+
+impl Qos {
+    /// The QoS a recorder's reader uses: the preset's, with a deeper history on streams.
+    pub fn recording_profile(self) -> QosProfile {
+        match self {
+            Qos::Stream => self.profile().history(History::KeepLast { depth: RECORDER_STREAM_DEPTH }),
+            other => other.profile(),
         }
     }
 }

@@ -22,6 +22,14 @@ pub struct SequencerConfig {
     /// The rig envelope: setpoints outside it are refused. Its profile limits also shape the
     /// ramps the sequencer builds itself (pause, resume).
     pub envelope: RigLimits,
+    /// No fresh `ThermalState` for this long (rig time, by stamp) while a procedure runs raises
+    /// an alarm \[s\]. Pauses never release on a stale state whatever this says.
+    pub thermal_alarm_after_s: f64,
+    /// The rig went silent (the shell's watchdog): e-stop instead of holding zero slip.
+    pub estop_on_rig_silence: bool,
+    /// When the silent rig's samples come back, rerun the interrupted sweep's group at once
+    /// (else wait for an operator RESUME).
+    pub resume_after_rig_silence: bool,
 }
 
 impl Default for SequencerConfig {
@@ -33,6 +41,9 @@ impl Default for SequencerConfig {
             min_thermal_pause_s: 1.0,
             pause_model: PauseModel::default(),
             envelope: RigLimits::default(),
+            thermal_alarm_after_s: 0.5,
+            estop_on_rig_silence: false,
+            resume_after_rig_silence: true,
         }
     }
 }
@@ -61,6 +72,7 @@ impl SequencerConfig {
             ("control_rate_hz", self.control_rate_hz),
             ("state_period_s", self.state_period_s),
             ("thermal_stale_after_s", self.thermal_stale_after_s),
+            ("thermal_alarm_after_s", self.thermal_alarm_after_s),
         ];
         for (key, v) in pos {
             if !(v.is_finite() && v > 0.0) {

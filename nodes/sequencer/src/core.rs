@@ -175,6 +175,28 @@ pub enum SequencerEvent {
     },
     /// Progress advanced: write [`Sequencer::checkpoint`] now.
     CheckpointChanged,
+    /// The rig sent nothing for `silent_s` (wall time, the shell's watchdog) while a procedure
+    /// ran: the rig is held at zero slip (or e-stopped, `estop_on_rig_silence`).
+    RigSilent {
+        /// How long it had been silent \[s\].
+        silent_s: f64,
+        /// ESTOP rather than a zero-slip hold.
+        estop: bool,
+    },
+    /// Samples flow again after [`SequencerEvent::RigSilent`]; `resumed`: the interrupted group
+    /// restarts at once (else an operator RESUME does it).
+    RigBack {
+        /// Whether the run resumed by itself.
+        resumed: bool,
+    },
+    /// No fresh `ThermalState` for `silent_s` of rig time while running: no sweep will be
+    /// released until it comes back.
+    ThermalLost {
+        /// Rig time since the last fresh state (or the run's start) \[s\].
+        silent_s: f64,
+    },
+    /// Fresh `ThermalState`s again after [`SequencerEvent::ThermalLost`].
+    ThermalBack,
     /// The rig reports it refused a setpoint (`RigSample.FAULT_ENVELOPE`, rising edge): its
     /// envelope is tighter than the sequencer's configured one. The run goes on; the data of
     /// the present step are suspect.
@@ -271,6 +293,12 @@ pub struct Sequencer {
     last_now_s: f64,
     /// The last sample carried FAULT_ENVELOPE (events fire on the rising edge).
     rig_envelope_fault: bool,
+    /// The pause in force was entered because the rig went silent (lifted by its next sample).
+    fault_hold: bool,
+    /// A [`SequencerEvent::ThermalLost`] is in force.
+    thermal_lost: bool,
+    /// Rig time of the last fresh `ThermalState`.
+    thermal_fresh_at: Option<f64>,
 }
 
 fn phase_of_kind(kind: StepKind) -> u8 {
@@ -339,6 +367,9 @@ impl Sequencer {
             resumed: false,
             last_now_s: 0.0,
             rig_envelope_fault: false,
+            fault_hold: false,
+            thermal_lost: false,
+            thermal_fresh_at: None,
         })
     }
 
@@ -483,6 +514,91 @@ impl Sequencer {
         }
         self.emit(now_s, &mut out, true);
         Ok(out)
+    }
+
+    /// The shell's watchdog: the rig has sent no sample for `silent_s` (wall time). A running
+    /// procedure is held at once — zero slip at the present load and speed (the setpoint is in
+    /// this call's output), or ESTOP with `estop_on_rig_silence`. Rig time stands still while
+    /// the rig is silent, so the hold is stamped with the last sample's time. Idempotent.
+    pub fn on_rig_silent(&mut self, silent_s: f64) -> SequencerOutput {
+        let mut out = SequencerOutput::default();
+        let now_s = self.last_now_s;
+        let State::Running(run) = &self.state else {
+            return out;
+        };
+        let run = run.clone();
+        if self.cfg.estop_on_rig_silence {
+            let (at, pause) = self.restart_point(&run);
+            self.stop(now_s, at, pause);
+            self.state = State::EStop;
+            out.events.push(SequencerEvent::RigSilent { silent_s, estop: true });
+            out.events.push(SequencerEvent::EStop);
+            out.events.push(SequencerEvent::CheckpointChanged);
+            out.setpoint = Some(self.setpoint_msg(now_s, &safe_setpoint()));
+        } else {
+            let from = self.last_setpoint.unwrap_or_else(|| self.step_start_sp());
+            let mut hold = from.zero_slip();
+            if hold.mode == RigMode::Static {
+                hold.mode = RigMode::FreeRolling;
+            }
+            self.state =
+                State::Paused { hold: Box::new(Trajectory::Keyframes(Keyframes::start(hold))), t0: now_s, was: run };
+            self.fault_hold = true;
+            out.events.push(SequencerEvent::RigSilent { silent_s, estop: false });
+            out.events.push(SequencerEvent::Paused);
+            self.last_setpoint = Some(hold);
+            out.setpoint = Some(self.setpoint_msg(now_s, &hold));
+        }
+        self.emit(now_s, &mut out, true);
+        out
+    }
+
+    /// Samples came back after a fault hold: rerun the interrupted group (as RESUME does), unless
+    /// configured to wait for the operator or the rig's clock went back (a restarted rig).
+    fn rig_back(&mut self, prev_now_s: f64, now_s: f64, out: &mut SequencerOutput) {
+        self.fault_hold = false;
+        let State::Paused { was, .. } = self.state.clone() else {
+            return;
+        };
+        let restarted = now_s + 1.0 < prev_now_s;
+        let resume = self.cfg.resume_after_rig_silence && !restarted;
+        out.events.push(SequencerEvent::RigBack { resumed: resume });
+        if !resume {
+            return;
+        }
+        match was {
+            Run::ThermalPause { t0, sp } => {
+                self.state = State::Running(Run::ThermalPause { t0, sp });
+                out.events.push(SequencerEvent::Resumed { from_step: self.cursor + 1 });
+            }
+            other => {
+                let (from_step, pause_first) = self.restart_point(&other);
+                out.events.push(SequencerEvent::Resumed { from_step });
+                self.begin_at(now_s, from_step, pause_first, out);
+            }
+        }
+    }
+
+    /// Raises [`SequencerEvent::ThermalLost`] / [`SequencerEvent::ThermalBack`] on the edges.
+    fn watch_thermal(&mut self, now_s: f64, thermal: Option<&ThermalState>, out: &mut SequencerOutput) {
+        let fresh = thermal.is_some_and(|th| now_s - th.header.stamp.as_secs_f64() <= self.cfg.thermal_alarm_after_s);
+        if fresh {
+            self.thermal_fresh_at = Some(now_s);
+            if self.thermal_lost {
+                self.thermal_lost = false;
+                out.events.push(SequencerEvent::ThermalBack);
+            }
+            return;
+        }
+        let running = matches!(self.state, State::Running(_) | State::Paused { .. });
+        if !running || self.thermal_lost {
+            return;
+        }
+        let since = self.thermal_fresh_at.into_iter().chain(self.run_started_s).fold(f64::NEG_INFINITY, f64::max);
+        if since.is_finite() && now_s - since > self.cfg.thermal_alarm_after_s {
+            self.thermal_lost = true;
+            out.events.push(SequencerEvent::ThermalLost { silent_s: now_s - since });
+        }
     }
 
     fn stop(&mut self, now_s: f64, at: usize, pause: bool) {
@@ -661,11 +777,16 @@ impl Sequencer {
     /// latest `RigSample` (used to ramp from where the rig really is after START/RESUME).
     pub fn step(&mut self, now_s: f64, thermal: Option<&ThermalState>, sample: Option<&RigSample>) -> SequencerOutput {
         let mut out = SequencerOutput::default();
+        let prev_now_s = self.last_now_s;
         self.last_now_s = now_s;
         if let Some(s) = sample {
             self.last_sample = Some(sample_setpoint(s));
+            if self.fault_hold {
+                self.rig_back(prev_now_s, now_s, &mut out);
+            }
             self.rig_faults(now_s, s, &mut out);
         }
+        self.watch_thermal(now_s, thermal, &mut out);
         if let Some(th) = thermal
             && now_s - th.header.stamp.as_secs_f64() <= self.cfg.thermal_stale_after_s
         {

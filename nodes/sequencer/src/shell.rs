@@ -4,14 +4,21 @@
 //! The core is stepped once per rig sample with the sample's stamp as `now`, so the node runs
 //! at the rig's rate on real, real-time virtual and accelerated (lockstep) rigs alike. Each
 //! setpoint carries the stamp of the sample it answers: a lockstep rig waits for exactly that.
+//!
+//! A watchdog (the one wall-clock reading here) checks every control cycle that samples still
+//! come: after `rig_silent_after_s` without one while a procedure runs, the core holds the rig
+//! safe in that same cycle and `/diagnostics` says so. Lost or malformed input on any topic is
+//! counted and announced (`node_runtime::LossWatch`).
 
 use crate::{Checkpoint, Sequencer, SequencerConfig, SequencerEvent};
 use futures::StreamExt;
-use node_runtime::{RosNode, RuntimeError, Shutdown, SuiteTopic};
+use node_runtime::{LossWatch, RosNode, RuntimeError, Shutdown, SuiteTopic};
 use procedure::{RunInputs, SweepStyle};
 use serde::Deserialize;
 use std::path::{Path, PathBuf};
-use tyre_msgs::{ProcedureCommand, ProcedureState, RigSample, RigSetpoint, ThermalState};
+use std::time::{Duration, Instant};
+use tyre_msgs::diagnostic_msgs::{DiagnosticArray, DiagnosticStatus, KeyValue};
+use tyre_msgs::{ProcedureCommand, ProcedureState, RigSample, RigSetpoint, ThermalState, std_msgs::Header};
 
 /// `[node.config]` of a sequencer node.
 #[derive(Debug, Clone, Deserialize)]
@@ -45,6 +52,51 @@ pub struct SequencerNodeConfig {
     /// Core settings (control rate, staleness, envelope, …).
     #[serde(default)]
     pub core: SequencerConfig,
+    /// Wall time without a rig sample, while a procedure runs, after which the rig is held
+    /// safe and an alarm raised \[s\].
+    #[serde(default = "default_rig_silent")]
+    pub rig_silent_after_s: f64,
+}
+
+fn default_rig_silent() -> f64 {
+    0.5
+}
+
+/// The `/diagnostics` status for a sequencer event that an operator must see, if it is one.
+pub fn event_status(node: &str, ev: &SequencerEvent, rig_time_s: f64) -> Option<DiagnosticStatus> {
+    let (level, check, message) = match ev {
+        SequencerEvent::RigSilent { silent_s, estop } => (
+            DiagnosticStatus::ERROR,
+            "rig_silent",
+            format!(
+                "no rig sample for {silent_s:.2} s: rig {}",
+                if *estop { "e-stopped" } else { "held at zero slip" }
+            ),
+        ),
+        SequencerEvent::RigBack { resumed } => (
+            DiagnosticStatus::WARN,
+            "rig_silent",
+            format!(
+                "rig samples back{}",
+                if *resumed { ": the interrupted sweep reruns" } else { ": waiting for RESUME" }
+            ),
+        ),
+        SequencerEvent::ThermalLost { silent_s } => (
+            DiagnosticStatus::ERROR,
+            "thermal_lost",
+            format!("no fresh thermal/state for {silent_s:.2} s of rig time: no sweep will be released"),
+        ),
+        SequencerEvent::ThermalBack => (DiagnosticStatus::WARN, "thermal_lost", "thermal/state fresh again".to_owned()),
+        SequencerEvent::EStop => (DiagnosticStatus::ERROR, "estop", "emergency stop".to_owned()),
+        _ => return None,
+    };
+    Some(DiagnosticStatus {
+        level,
+        name: format!("{node}: {check}"),
+        message,
+        hardware_id: "sequencer".into(),
+        values: vec![KeyValue { key: "rig_time_s".into(), value: format!("{rig_time_s:.3}") }],
+    })
 }
 
 fn default_li() -> u32 {
@@ -118,6 +170,8 @@ pub async fn run(mut node: RosNode, cfg: SequencerNodeConfig, shutdown: Shutdown
 
     let setpoint_pub = node.publisher::<RigSetpoint>(SuiteTopic::RigSetpoint)?;
     let state_pub = node.publisher::<ProcedureState>(SuiteTopic::ProcedureState)?;
+    let diag_pub = node.publisher::<DiagnosticArray>(SuiteTopic::Diagnostics)?;
+    let node_name = node.name().to_owned();
     let samples = node.subscription::<RigSample>(SuiteTopic::RigSample)?;
     let thermal = node.subscription::<ThermalState>(SuiteTopic::ThermalState)?;
     let commands = node.subscription::<ProcedureCommand>(SuiteTopic::ProcedureCommand)?;
@@ -127,13 +181,37 @@ pub async fn run(mut node: RosNode, cfg: SequencerNodeConfig, shutdown: Shutdown
     let mut latest_thermal: Option<ThermalState> = None;
     let mut now_s = 0.0;
     let mut pending_start = cfg.autostart;
+    let (sample_topic, thermal_topic, command_topic) = (
+        node.topic_name(SuiteTopic::RigSample),
+        node.topic_name(SuiteTopic::ThermalState),
+        node.topic_name(SuiteTopic::ProcedureCommand),
+    );
+    let mut loss = LossWatch::new(node.name());
+    // Watchdog: checked every control cycle; armed by the first sample.
+    let mut watchdog = tokio::time::interval(Duration::from_secs_f64(1.0 / cfg.core.control_rate_hz));
+    watchdog.set_missed_tick_behavior(tokio::time::MissedTickBehavior::Delay);
+    let mut last_sample_at: Option<Instant> = None;
+    let silent_after = Duration::from_secs_f64(cfg.rig_silent_after_s.max(0.0));
 
     let handle = |out: crate::SequencerOutput, seq: &Sequencer| -> Result<bool, SequencerNodeError> {
+        let rig_time_s = out.setpoint.as_ref().map(|sp| sp.header.stamp.as_secs_f64());
         if let Some(sp) = out.setpoint {
             let _ = setpoint_pub.publish(sp);
         }
         if let Some(st) = out.state {
             let _ = state_pub.publish(st);
+        }
+        let statuses: Vec<_> =
+            out.events.iter().filter_map(|ev| event_status(&node_name, ev, rig_time_s.unwrap_or(0.0))).collect();
+        if !statuses.is_empty() {
+            for st in &statuses {
+                tracing::warn!("{}: {}", st.name, st.message);
+            }
+            let header = Header {
+                stamp: tyre_msgs::builtin_interfaces::Time::from_secs_f64(rig_time_s.unwrap_or(0.0)),
+                frame_id: String::new(),
+            };
+            let _ = diag_pub.publish(DiagnosticArray { header, status: statuses });
         }
         let mut done = false;
         for ev in &out.events {
@@ -157,23 +235,39 @@ pub async fn run(mut node: RosNode, cfg: SequencerNodeConfig, shutdown: Shutdown
     loop {
         tokio::select! {
             _ = shutdown.wait() => break,
+            _ = watchdog.tick() => {
+                if let Some(at) = last_sample_at
+                    && at.elapsed() >= silent_after
+                {
+                    let out = seq.on_rig_silent(at.elapsed().as_secs_f64());
+                    if handle(out, &seq)? && cfg.exit_when_done { break; }
+                }
+            },
             item = commands.next() => match item {
-                Some(Ok((cmd, _))) => match seq.on_command(now_s, &cmd) {
+                Some(Ok((cmd, info))) => {
+                    loss.on_message(&command_topic, &info, None);
+                    match seq.on_command(now_s, &cmd) {
                     Ok(out) => {
                         if handle(out, &seq)? && cfg.exit_when_done { break; }
                     }
                     Err(rejected) => tracing::warn!("command refused: {rejected}"),
-                },
-                Some(Err(e)) => tracing::warn!("procedure/command: {e:?}"),
+                    }
+                }
+                Some(Err(e)) => loss.on_read_error(&command_topic, &e),
                 None => break,
             },
             item = thermal.next() => match item {
-                Some(Ok((th, _))) => latest_thermal = Some(th),
-                Some(Err(e)) => tracing::warn!("thermal/state: {e:?}"),
+                Some(Ok((th, info))) => {
+                    loss.on_message(&thermal_topic, &info, None);
+                    latest_thermal = Some(th)
+                }
+                Some(Err(e)) => loss.on_read_error(&thermal_topic, &e),
                 None => break,
             },
             item = samples.next() => match item {
-                Some(Ok((s, _))) => {
+                Some(Ok((s, info))) => {
+                    loss.on_message(&sample_topic, &info, Some(s.seq));
+                    last_sample_at = Some(Instant::now());
                     now_s = s.header.stamp.as_secs_f64();
                     if pending_start {
                         pending_start = false;
@@ -186,10 +280,11 @@ pub async fn run(mut node: RosNode, cfg: SequencerNodeConfig, shutdown: Shutdown
                     let out = seq.step(now_s, latest_thermal.as_ref(), Some(&s));
                     if handle(out, &seq)? && cfg.exit_when_done { break; }
                 }
-                Some(Err(e)) => tracing::warn!("sample: {e:?}"),
+                Some(Err(e)) => loss.on_read_error(&sample_topic, &e),
                 None => break,
             },
         }
+        loss.announce(&diag_pub, tyre_msgs::builtin_interfaces::Time::from_secs_f64(now_s));
     }
     Ok(())
 }

@@ -650,3 +650,92 @@ fn deterministic_outputs() {
     };
     assert_eq!(run(), run());
 }
+
+fn rig_sample(t: f64, sp: &RigSetpoint) -> RigSample {
+    RigSample {
+        header: Header::iso_w(t),
+        slipangl_deg: sp.slip_angle_deg,
+        longslip: sp.slip_ratio,
+        fzw_n: sp.fz_n,
+        trajvelw_mps: sp.speed_mps,
+        inflpres_pa: sp.pressure_pa,
+        rig_mode: sp.mode,
+        ..RigSample::default()
+    }
+}
+
+/// The rig goes silent mid-sweep (killed, stopped, cable pulled): the watchdog's call holds zero
+/// slip in the same output; when samples come back the interrupted sweep's group reruns.
+#[test]
+fn a_silent_rig_is_held_at_zero_slip_and_the_interrupted_sweep_reruns() {
+    let mut h = Harness::new(Sequencer::new(mini_plan(), SequencerConfig::default()).unwrap(), 1.0);
+    h.command(ProcedureCommand::START).unwrap();
+    h.run_until(100.0, |o| o.setpoint.as_ref().is_some_and(|s| s.slip_angle_deg.abs() > 5.0));
+    let last = h.log.last().unwrap().1.setpoint.clone().unwrap();
+    let interrupted = last.sweep_name.clone();
+
+    let out = h.seq.on_rig_silent(0.5);
+    assert!(out.events.contains(&SequencerEvent::RigSilent { silent_s: 0.5, estop: false }), "{:?}", out.events);
+    let held = out.setpoint.expect("the hold goes out at once");
+    assert_eq!((held.slip_angle_deg, held.slip_ratio), (0.0, 0.0));
+    assert_eq!(held.fz_n, last.fz_n, "the load stays: zero slip, not unloaded");
+    assert_eq!(out.state.expect("state").phase, ProcedureState::PHASE_PAUSED);
+    // The watchdog keeps firing while the rig is silent: nothing more happens.
+    assert_eq!(h.seq.on_rig_silent(1.0).events, vec![]);
+    // Without samples (thermal only), the hold stands.
+    let o = h.tick();
+    assert_eq!(o.setpoint.unwrap().slip_angle_deg, 0.0);
+
+    // The rig answers again: the interrupted sweep's group restarts by itself.
+    h.t += h.dt;
+    let th = h.gate.state(h.t);
+    let out = h.seq.step(h.t, Some(&th), Some(&rig_sample(h.t, &held)));
+    h.gate.observe(h.t, &out);
+    h.log.push((h.t, out.clone()));
+    assert!(out.events.contains(&SequencerEvent::RigBack { resumed: true }), "{:?}", out.events);
+    assert!(out.events.iter().any(|e| matches!(e, SequencerEvent::Resumed { .. })));
+    h.run_until(1000.0, completed);
+    let started = h.sweeps_started();
+    assert_eq!(started.iter().filter(|n| **n == interrupted).count(), 2, "{started:?}");
+}
+
+/// With `estop_on_rig_silence` the silent rig is e-stopped instead; START resumes later.
+#[test]
+fn a_silent_rig_is_estopped_where_configured() {
+    let cfg = SequencerConfig { estop_on_rig_silence: true, ..SequencerConfig::default() };
+    let mut h = Harness::new(Sequencer::new(mini_plan(), cfg).unwrap(), 1.0);
+    h.command(ProcedureCommand::START).unwrap();
+    h.run_until(100.0, |o| o.setpoint.as_ref().is_some_and(|s| s.slip_angle_deg.abs() > 5.0));
+    let out = h.seq.on_rig_silent(0.5);
+    assert!(out.events.contains(&SequencerEvent::EStop));
+    assert_eq!(out.setpoint.expect("safe at once").mode, RigSetpoint::MODE_SAFE);
+    assert_eq!(out.state.expect("state").phase, ProcedureState::PHASE_ESTOP);
+}
+
+/// No fresh ThermalState while running raises ThermalLost once (within thermal_alarm_after_s of
+/// rig time), never releases a pause, and ThermalBack follows when states come back.
+#[test]
+fn lost_thermal_state_alarms_once_and_recovers() {
+    let mut s = Sequencer::new(mini_plan(), SequencerConfig::default()).unwrap();
+    s.on_command(0.0, &cmd(ProcedureCommand::START)).unwrap();
+    let fresh = |t: f64| ThermalState { header: Header::iso_w(t), ..ThermalState::default() };
+    let mut t = 0.0;
+    let mut lost_at = Vec::new();
+    for i in 1..=300 {
+        t = f64::from(i) * 0.01;
+        // Fresh states for 1 s, then none.
+        let th = (t <= 1.0).then(|| fresh(t));
+        let o = s.step(t, th.as_ref(), None);
+        for e in &o.events {
+            if matches!(e, SequencerEvent::ThermalLost { .. }) {
+                lost_at.push(t);
+            }
+            assert!(!matches!(e, SequencerEvent::ThermalPauseEnded { .. }));
+        }
+    }
+    assert_eq!(lost_at.len(), 1, "{lost_at:?}");
+    assert!(lost_at[0] > 1.5 && lost_at[0] <= 1.52, "{lost_at:?}");
+    t += 0.01;
+    let o = s.step(t, Some(&fresh(t)), None);
+    assert!(o.events.contains(&SequencerEvent::ThermalBack));
+}

@@ -450,6 +450,10 @@ pub struct ThermalGate {
     pending: Vec<ThermalAlarm>,
     started_hot: bool,
     warm_up_reached: bool,
+    /// `RigSample.seq` of the last sample judged.
+    last_seq: Option<u64>,
+    /// Gaps in `RigSample.seq` the median did not span.
+    seq_gaps: u64,
 }
 
 impl ThermalGate {
@@ -475,8 +479,15 @@ impl ThermalGate {
             pending: Vec::new(),
             started_hot: false,
             warm_up_reached: false,
+            last_seq: None,
+            seq_gaps: 0,
             config,
         })
+    }
+
+    /// Gaps in `RigSample.seq` seen so far; the median filter restarts after each.
+    pub fn seq_gaps(&self) -> u64 {
+        self.seq_gaps
     }
 
     /// The configuration in use.
@@ -500,6 +511,16 @@ impl ThermalGate {
             return;
         }
         self.last_sample_s = Some(now_s);
+        // Samples lost on the way (a jump in RigSample.seq; a repeated number means a source
+        // without a counter): the median must not span the gap.
+        if let Some(last) = self.last_seq
+            && sample.seq != last
+            && sample.seq != last.wrapping_add(1)
+        {
+            self.seq_gaps += 1;
+            self.filter.clear();
+        }
+        self.last_seq = Some(sample.seq);
         self.raw_c = [sample.trdtempi_c, sample.trdtempc_c, sample.trdtempo_c];
 
         if let Some(fault) = self.judge_sample(sample) {

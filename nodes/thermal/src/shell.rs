@@ -5,7 +5,7 @@
 
 use crate::{AlarmLevel, ThermalConfig, ThermalGate};
 use futures::StreamExt;
-use node_runtime::{RosNode, RuntimeError, Shutdown, SuiteTopic};
+use node_runtime::{LossWatch, RosNode, RuntimeError, Shutdown, SuiteTopic};
 use tyre_msgs::{
     ProcedureState, RigSample, ThermalState,
     diagnostic_msgs::{DiagnosticArray, DiagnosticStatus, KeyValue},
@@ -29,16 +29,25 @@ pub async fn run(mut node: RosNode, cfg: ThermalConfig, shutdown: Shutdown) -> R
     let states = node.subscription::<ProcedureState>(SuiteTopic::ProcedureState)?;
     let mut samples = Box::pin(samples.async_stream());
     let mut states = Box::pin(states.async_stream());
+    let (sample_topic, state_topic) =
+        (node.topic_name(SuiteTopic::RigSample), node.topic_name(SuiteTopic::ProcedureState));
+    let mut loss = LossWatch::new(node.name());
+    let mut stamp = tyre_msgs::builtin_interfaces::Time::default();
     loop {
         tokio::select! {
             _ = shutdown.wait() => break,
             item = states.next() => match item {
-                Some(Ok((st, _))) => gate.on_procedure_state(st.header.stamp.as_secs_f64(), &st),
-                Some(Err(e)) => tracing::warn!("procedure/state: {e:?}"),
+                Some(Ok((st, info))) => {
+                    loss.on_message(&state_topic, &info, None);
+                    gate.on_procedure_state(st.header.stamp.as_secs_f64(), &st)
+                }
+                Some(Err(e)) => loss.on_read_error(&state_topic, &e),
                 None => break,
             },
             item = samples.next() => match item {
-                Some(Ok((s, _))) => {
+                Some(Ok((s, info))) => {
+                    loss.on_message(&sample_topic, &info, Some(s.seq));
+                    stamp = s.header.stamp;
                     let t = s.header.stamp.as_secs_f64();
                     gate.on_sample(t, &s);
                     let out = gate.step(t);
@@ -56,10 +65,11 @@ pub async fn run(mut node: RosNode, cfg: ThermalConfig, shutdown: Shutdown) -> R
                         let _ = diag_pub.publish(DiagnosticArray { header: out.state.header.clone(), status });
                     }
                 }
-                Some(Err(e)) => tracing::warn!("sample: {e:?}"),
+                Some(Err(e)) => loss.on_read_error(&sample_topic, &e),
                 None => break,
             },
         }
+        loss.announce(&diag_pub, stamp);
     }
     Ok(())
 }

@@ -437,3 +437,25 @@ fn out_of_order_sample_is_dropped_with_a_warning() {
     assert_eq!(out.alarms[0].level, AlarmLevel::Warn);
     assert_eq!(out.alarms[0].check, ThermalCheck::Sensor);
 }
+
+/// Samples lost on the way (a jump in `RigSample.seq`) are a gap: the spike median restarts
+/// instead of mixing readings from before and after it.
+#[test]
+fn a_gap_in_the_sample_counter_restarts_the_median() {
+    let filtered_after = |jump: u64| {
+        let mut gate = ThermalGate::new(ThermalConfig::default()).unwrap();
+        let mut t = 0.0;
+        for seq in 1..=20 {
+            t += DT_S;
+            gate.on_sample(t, &sample(seq, 20.0, 40.0, 20.0));
+        }
+        // Three samples later (30 ms, well inside the 0.5 s median window) the tyre reads 60 °C.
+        t += 3.0 * DT_S;
+        gate.on_sample(t, &sample(20 + jump, 20.0, 60.0, 20.0));
+        (gate.step(t).state.filtered_temp_c, gate.seq_gaps())
+    };
+    // Consecutive numbers: one 60 °C reading among twenty at 40 °C is a spike the median rejects.
+    assert_eq!(filtered_after(1), (40.0, 0));
+    // Two samples lost: the median starts again from the first reading after the gap.
+    assert_eq!(filtered_after(3), (60.0, 1));
+}

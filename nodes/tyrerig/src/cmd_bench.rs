@@ -15,6 +15,22 @@ pub enum BenchCmd {
         #[arg(long, default_value_t = 10.0)]
         seconds: f64,
     },
+    /// A rig sample's way through the whole suite: from the rig's write of a sample to the
+    /// LiveChannels, the ThermalState and the RigSetpoint computed from it, with every node
+    /// running (virtual rig in real time at --rate-hz, thermal, sequencer running FreeRolling,
+    /// quality, recorder), in this process or --processes.
+    SuiteLatency {
+        #[arg(long, default_value_t = 1000)]
+        rate_hz: u32,
+        #[arg(long, default_value_t = 10.0)]
+        seconds: f64,
+        /// Every node its own OS process (`tyrerig launch --processes`).
+        #[arg(long)]
+        processes: bool,
+        /// launch-config directory (virtual_rig.toml, procedures).
+        #[arg(long, default_value = "launch-config")]
+        launch_config: std::path::PathBuf,
+    },
     /// RigSamples published at a rate (0 = flat out) and recorded by the recorder node through DDS.
     Recorder {
         #[arg(long, default_value_t = 1000.0)]
@@ -77,6 +93,9 @@ pub fn run(cmd: BenchCmd) -> anyhow::Result<()> {
         BenchCmd::Foxglove { clients, rate_hz, seconds, port } => {
             rt.block_on(crate::bench_foxglove::run(clients, rate_hz, seconds, port))
         }
+        BenchCmd::SuiteLatency { rate_hz, seconds, processes, launch_config } => {
+            rt.block_on(suite_latency(rate_hz, seconds, processes, &launch_config))
+        }
         BenchCmd::DdsLatency { rate_hz, seconds } => rt.block_on(async {
             let mut a = RosNode::new("bench_pub", &cfg)?;
             let mut b = RosNode::new("bench_sub", &cfg)?;
@@ -133,46 +152,237 @@ pub fn run(cmd: BenchCmd) -> anyhow::Result<()> {
             let mut a = RosNode::new("bench_pub", &cfg)?;
             let publisher = a.publisher::<RigSample>(SuiteTopic::RigSample)?;
             tokio::time::sleep(Duration::from_secs(3)).await;
+            // Every publish call is timed: the rig's publisher must never be held up.
+            let mut call_us: Vec<f64> = Vec::with_capacity((rate_hz.max(1e5) * seconds) as usize);
+            let mut refused = 0u64;
             let start = Instant::now();
             let mut seq = 0u64;
+            let publish = |seq: u64, call_us: &mut Vec<f64>| {
+                let t0 = Instant::now();
+                let ok = publisher.publish(sample(seq)).is_ok();
+                call_us.push(t0.elapsed().as_secs_f64() * 1e6);
+                ok
+            };
             if rate_hz > 0.0 {
                 let mut tick = tokio::time::interval(Duration::from_secs_f64(1.0 / rate_hz));
                 while start.elapsed().as_secs_f64() < seconds {
                     tick.tick().await;
-                    publisher.publish(sample(seq)).map_err(|e| anyhow::anyhow!("{e:?}"))?;
+                    if !publish(seq, &mut call_us) {
+                        refused += 1; // the sample is gone: RigSample.seq shows the gap
+                    }
                     seq += 1;
                 }
             } else {
-                let mut blocked = 0u64;
                 while start.elapsed().as_secs_f64() < seconds {
-                    // Flat out, the reliable writer's history fills when the recorder falls
-                    // behind; back off and retry (flow control), never drop.
-                    while publisher.publish(sample(seq)).is_err() {
-                        blocked += 1;
-                        tokio::time::sleep(Duration::from_millis(1)).await;
+                    if !publish(seq, &mut call_us) {
+                        refused += 1;
                     }
                     seq += 1;
                     if seq.is_multiple_of(256) {
                         tokio::task::yield_now().await;
                     }
                 }
-                tracing::info!(blocked, "publisher back-offs");
             }
             let publish_s = start.elapsed().as_secs_f64();
             tokio::time::sleep(Duration::from_secs(2)).await;
             shutdown.trigger();
             let stats = rec.await??;
             let size = std::fs::metadata(&out).map(|m| m.len()).unwrap_or(0);
+            call_us.sort_by(f64::total_cmp);
+            let over_1ms = call_us.iter().filter(|&&u| u > 1000.0).count();
+            // Read the log back: what it holds and what it says it lost must add up to what was
+            // published (the first sample had seq 0).
+            let log = mcaplog::LogReader::open(&out)?;
+            let (in_log, _, seq_missing) = log.sample_seq_gaps("/rig/sample")?;
+            let samples = log.typed::<RigSample>("/rig/sample")?;
+            let first = samples.first().map_or(0, |(_, s)| s.seq);
+            let after_last = samples.last().map_or(seq, |(_, s)| seq.saturating_sub(1).saturating_sub(s.seq));
             println!(
-                "recorder through DDS, {}: published {seq} in {publish_s:.1} s, recorded {} \
-                 ({:.0} msg/s, {:.2} MB/s payload, file {:.2} MB)",
+                "recorder through DDS, {}: published {seq} in {publish_s:.1} s ({:.0} msg/s), {refused} refused by the writer",
                 if rate_hz > 0.0 { format!("{rate_hz} Hz") } else { "flat out".into() },
+                seq as f64 / publish_s
+            );
+            println!(
+                "  recorded {} ({:.0} msg/s, {:.2} MB/s payload, file {:.2} MB); the recorder reports {} lost, {} malformed",
                 stats.messages,
                 stats.messages as f64 / publish_s,
                 stats.payload_bytes as f64 / publish_s / 1e6,
-                size as f64 / 1e6
+                size as f64 / 1e6,
+                stats.lost,
+                stats.malformed
+            );
+            println!(
+                "  the log read back: {in_log} samples, {seq_missing} missing by RigSample.seq between the first ({first}) \
+                 and the last; {} published after the last recorded; {} not in the log and not reported",
+                after_last,
+                seq.saturating_sub(in_log + stats.lost.max(seq_missing) + first + after_last)
+            );
+            println!(
+                "  publish call: p50 {:.1} us, p99.9 {:.1} us, max {:.1} us; {over_1ms} of {} calls over 1 ms",
+                percentile(&call_us, 0.5),
+                percentile(&call_us, 0.999),
+                call_us.last().copied().unwrap_or(f64::NAN),
+                call_us.len()
             );
             anyhow::Ok(())
         }),
     }
+}
+
+fn nanos_now() -> i64 {
+    SystemTime::now().duration_since(SystemTime::UNIX_EPOCH).map_or(0, |d| d.as_nanos() as i64)
+}
+
+/// The launch file of the latency bench: the whole suite, the rig in real time at `rate_hz`.
+fn latency_launch_file(dir: &std::path::Path, rate_hz: u32, launch_config: &std::path::Path) -> anyhow::Result<String> {
+    let abs = |p: std::path::PathBuf| -> anyhow::Result<String> {
+        Ok(std::path::absolute(&p).with_context(|| format!("{}", p.display()))?.display().to_string())
+    };
+    let rig = abs(launch_config.join("virtual_rig.toml"))?;
+    let procedure = abs(launch_config.join("procedures/gs2mf_freerolling.toml"))?;
+    let out = abs(dir.join("latency.mcap"))?;
+    Ok(format!(
+        r#"
+[[node]]
+name = "recorder"
+kind = "recorder"
+[node.config]
+output = "{out}"
+
+[[node]]
+name = "virtual_rig"
+kind = "virtual_rig"
+[node.config]
+rig_config = "{rig}"
+clock = "realtime"
+publish_rate_hz = {rate_hz}
+start_delay_s = 3.0
+
+[[node]]
+name = "thermal"
+kind = "thermal"
+
+[[node]]
+name = "sequencer"
+kind = "sequencer"
+[node.config]
+procedure = "{procedure}"
+autostart = true
+
+[[node]]
+name = "quality"
+kind = "quality"
+"#
+    ))
+}
+
+/// Receive times (ns, wall clock) of the messages computed from each sample, keyed by the
+/// sample's stamp (every derived message carries it).
+#[derive(Default)]
+struct Arrivals {
+    sample_written_ns: std::collections::HashMap<u64, i64>,
+    live_ns: Vec<(u64, i64)>,
+    thermal_ns: Vec<(u64, i64)>,
+    setpoint_ns: Vec<(u64, i64)>,
+}
+
+async fn suite_latency(
+    rate_hz: u32,
+    seconds: f64,
+    processes: bool,
+    launch_config: &std::path::Path,
+) -> anyhow::Result<()> {
+    use tyre_msgs::{LiveChannels, RigSetpoint, ThermalState};
+    let dir = std::env::temp_dir().join(format!("tyrerig-latency-{}", std::process::id()));
+    std::fs::create_dir_all(&dir)?;
+    let launch_path = dir.join("latency.toml");
+    std::fs::write(&launch_path, latency_launch_file(&dir, rate_hz, launch_config)?)?;
+    let file = crate::launch::LaunchFile::load(&launch_path)?;
+    let shutdown = Shutdown::new();
+    let mut child = None;
+    let mut tasks = tokio::task::JoinSet::new();
+    if processes {
+        let exe = std::env::current_exe().context("cannot find the tyrerig executable")?;
+        child = Some(
+            std::process::Command::new(exe)
+                .arg("launch")
+                .arg(&launch_path)
+                .arg("--processes")
+                .spawn()
+                .context("cannot start the suite")?,
+        );
+    } else {
+        for entry in file.nodes.clone() {
+            let (rt_cfg, sd) = (file.runtime.clone(), shutdown.clone());
+            tasks.spawn(async move { crate::launch::run_node(&entry, &rt_cfg, sd).await });
+        }
+    }
+    // The probe: its own participant, like a control room's.
+    let mut probe = RosNode::new("latency_probe", &file.runtime)?;
+    let samples = probe.subscription::<RigSample>(SuiteTopic::RigSample)?;
+    let live = probe.subscription::<LiveChannels>(SuiteTopic::LiveChannels)?;
+    let thermal = probe.subscription::<ThermalState>(SuiteTopic::ThermalState)?;
+    let setpoints = probe.subscription::<RigSetpoint>(SuiteTopic::RigSetpoint)?;
+    let (mut s_st, mut l_st, mut t_st, mut p_st) = (
+        Box::pin(samples.async_stream()),
+        Box::pin(live.async_stream()),
+        Box::pin(thermal.async_stream()),
+        Box::pin(setpoints.async_stream()),
+    );
+    let mut a = Arrivals::default();
+    let mut started: Option<tokio::time::Instant> = None;
+    let give_up = tokio::time::Instant::now() + Duration::from_secs(60);
+    loop {
+        if started.is_some_and(|t| t.elapsed().as_secs_f64() >= seconds) || tokio::time::Instant::now() > give_up {
+            break;
+        }
+        tokio::select! {
+            Some(Ok((s, info))) = s_st.next() => {
+                started.get_or_insert_with(tokio::time::Instant::now);
+                // When the rig wrote it (DDS source timestamp, same host clock).
+                let written = info.source_timestamp().map_or_else(nanos_now, |t| t.to_nanos());
+                a.sample_written_ns.insert(s.header.stamp.as_nanos(), written);
+            }
+            Some(Ok((m, _))) = l_st.next() => a.live_ns.push((m.header.stamp.as_nanos(), nanos_now())),
+            Some(Ok((m, _))) = t_st.next() => a.thermal_ns.push((m.header.stamp.as_nanos(), nanos_now())),
+            Some(Ok((m, _))) = p_st.next() => a.setpoint_ns.push((m.header.stamp.as_nanos(), nanos_now())),
+            _ = tokio::time::sleep(Duration::from_millis(100)) => {}
+        }
+    }
+    shutdown.trigger();
+    if let Some(mut c) = child {
+        if let Some(pid) = rustix::process::Pid::from_raw(c.id() as i32) {
+            let _ = rustix::process::kill_process(pid, rustix::process::Signal::INT);
+        }
+        let _ = c.wait();
+    }
+    while tasks.join_next().await.is_some() {}
+    let n_samples = a.sample_written_ns.len();
+    println!(
+        "suite latency, rig at {rate_hz} Hz in real time, {seconds} s, {}: {n_samples} samples",
+        if processes { "every node its own process" } else { "every node in one process" }
+    );
+    if n_samples == 0 {
+        anyhow::bail!("no rig sample arrived within 60 s");
+    }
+    for (what, arrivals) in [
+        ("sample -> LiveChannels (quality node)", &a.live_ns),
+        ("sample -> ThermalState (thermal node)", &a.thermal_ns),
+        ("sample -> RigSetpoint answering it (sequencer)", &a.setpoint_ns),
+    ] {
+        let mut lat_us: Vec<f64> = arrivals
+            .iter()
+            .filter_map(|(stamp, at)| a.sample_written_ns.get(stamp).map(|w| (at - w) as f64 * 1e-3))
+            .collect();
+        lat_us.sort_by(f64::total_cmp);
+        println!(
+            "  {what:<48} {:>6} matched: p50 {:>7.0} us, p99 {:>7.0} us, max {:>7.0} us",
+            lat_us.len(),
+            percentile(&lat_us, 0.5),
+            percentile(&lat_us, 0.99),
+            lat_us.last().copied().unwrap_or(f64::NAN)
+        );
+    }
+    let _ = std::fs::remove_dir_all(&dir);
+    Ok(())
 }

@@ -58,10 +58,11 @@ pub struct FitArgs {
 /// Exit code of `tyrerig fit` when the model was written but is non-physical.
 pub const EXIT_NONPHYSICAL: i32 = 3;
 
-fn read_any(path: &Path) -> Result<mffit::Dataset> {
+/// A data file and the warnings about what it is missing (logs say what they lost).
+fn read_any(path: &Path) -> Result<(mffit::Dataset, Vec<String>)> {
     let measured = path.is_dir() || rigdata::import::FileFormat::of(path).is_some();
     if !measured {
-        return Ok(mffit::logs::read_log(path)?);
+        return Ok(mffit::logs::read_log_with_warnings(path)?);
     }
     let import = rigdata::read_path(path, &rigdata::ReadOptions::default())?;
     for f in &import.inspection.files {
@@ -75,16 +76,18 @@ fn read_any(path: &Path) -> Result<mffit::Dataset> {
             f.warnings.len()
         );
     }
-    Ok(import.dataset)
+    Ok((import.dataset, Vec::new()))
 }
 
 /// Runs the fit.
 pub fn run(args: FitArgs) -> Result<()> {
     let mut data = mffit::Dataset::default();
+    let mut data_warnings = Vec::new();
     for p in &args.logs {
-        let d = read_any(p).with_context(|| format!("reading {}", p.display()))?;
+        let (d, w) = read_any(p).with_context(|| format!("reading {}", p.display()))?;
         eprintln!("{}: {} segments, {} samples", p.display(), d.segments.len(), d.len());
         data.extend(d);
+        data_warnings.extend(w);
     }
     if data.is_empty() {
         bail!("no data in {:?}", args.logs);
@@ -113,6 +116,9 @@ pub fn run(args: FitArgs) -> Result<()> {
         opts.threads = t.max(1);
     }
     let mut result = fit(&data, &opts)?;
+    // What the logs are missing heads the warnings (and the report's list of them).
+    data_warnings.append(&mut result.warnings);
+    result.warnings = data_warnings;
     eprintln!(
         "{:<18} {:>6} {:>12} {:>9} {:>9} {:>5} {:>5} {:>8}",
         "stage", "points", "rmse", "nrmse %", "held-out", "fit", "held", "wall s"
@@ -134,7 +140,7 @@ pub fn run(args: FitArgs) -> Result<()> {
         }
     }
     for v in &args.validate {
-        let other = read_any(v).with_context(|| format!("reading {} (--validate)", v.display()))?;
+        let (other, _) = read_any(v).with_context(|| format!("reading {} (--validate)", v.display()))?;
         let rows = mffit::stages::validate(&result, &other, &opts);
         eprintln!("validation on {}:", v.display());
         for r in &rows {

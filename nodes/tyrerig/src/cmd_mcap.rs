@@ -47,6 +47,9 @@ pub fn run(cmd: McapCmd) -> anyhow::Result<()> {
             let log = LogReader::open(&file)?;
             println!("{}", file.display());
             for (name, entries) in log.metadata() {
+                if name == streamloss::LOSS_RECORD {
+                    continue; // summarised below
+                }
                 println!("  metadata {name}:");
                 for (k, v) in entries {
                     println!("    {k} = {v}");
@@ -57,7 +60,29 @@ pub fn run(cmd: McapCmd) -> anyhow::Result<()> {
                 let span = (t.last_log_time_ns - t.first_log_time_ns) as f64 * 1e-9;
                 println!("  {:<32} {:<40} {:>10} {:>10.2}", t.topic, t.ros_type, t.messages, span);
             }
+            for line in loss_lines(&log) {
+                println!("  {line}");
+            }
             Ok(())
         }
     }
+}
+
+/// The log's loss summary, with every writer's gap ranges.
+pub fn loss_lines(log: &LogReader) -> Vec<String> {
+    let mut out = log.loss_summary().lines;
+    if let Some(Ok(r)) = log.loss_report() {
+        for s in r.streams.iter().filter(|s| s.lost > 0) {
+            let more = s.gaps_total.saturating_sub(s.gaps.len() as u64);
+            out.push(format!(
+                "  {} {} writer {:032x}: gaps {}{}",
+                s.topic,
+                s.source.as_str(),
+                s.writer,
+                s.gaps.iter().map(ToString::to_string).collect::<Vec<_>>().join(" "),
+                if more > 0 { format!(" and {more} more") } else { String::new() }
+            ));
+        }
+    }
+    out
 }

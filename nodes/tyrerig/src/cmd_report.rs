@@ -93,5 +93,8 @@ pub fn run(args: ReportArgs) -> anyhow::Result<()> {
         r.wear.map_or(f64::NAN, |w| w.wear_mm),
         r.derived.len()
     );
+    for l in &r.data_loss {
+        println!("  {l}");
+    }
     Ok(())
 }

@@ -87,8 +87,13 @@ impl LaunchFile {
     pub fn load(path: &Path) -> anyhow::Result<Self> {
         let text =
             std::fs::read_to_string(path).with_context(|| format!("{}: cannot read launch file", path.display()))?;
+        Self::parse(path, &text)
+    }
+
+    /// As [`LaunchFile::load`], from the file's text (`path` names it and anchors relative paths).
+    pub fn parse(path: &Path, text: &str) -> anyhow::Result<Self> {
         let mut file: LaunchFile =
-            toml::from_str(&text).map_err(|e| anyhow::anyhow!("{}: {}", path.display(), e.to_string().trim_end()))?;
+            toml::from_str(text).map_err(|e| anyhow::anyhow!("{}: {}", path.display(), e.to_string().trim_end()))?;
         file.runtime.validate().map_err(|e| anyhow::anyhow!("{}: [runtime]: {e}", path.display()))?;
         let base = path.parent().unwrap_or(Path::new("."));
         let mut seen = std::collections::BTreeSet::new();
@@ -231,6 +236,20 @@ mod tests {
         for k in ["recorder", "virtual_rig", "thermal", "sequencer", "quality", "foxglove"] {
             assert!(kinds.contains(&k), "suite.toml has no {k} node: {kinds:?}");
         }
+    }
+
+    /// Launch files are user input: fuzzed with the parser_fuzz harness (every node kind's
+    /// typed config is checked when the file loads).
+    #[test]
+    fn launch_files_fuzz() {
+        let seeds = ["demo.toml", "suite.toml"]
+            .map(|n| std::fs::read(launch_config().join(n)).expect("seed launch file"))
+            .to_vec();
+        let at = launch_config().join("fuzz.toml");
+        let cases = std::env::var("FUZZ_CASES").ok().and_then(|v| v.parse().ok()).unwrap_or(2000);
+        parser_fuzz::fuzz("launch TOML", seeds, cases, |b| {
+            LaunchFile::parse(&at, &parser_fuzz::text(b)).map(|_| ()).map_err(|e| format!("{e:#}"))
+        });
     }
 
     #[test]

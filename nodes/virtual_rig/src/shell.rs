@@ -1,11 +1,21 @@
 //! The DDS shell: setpoints in, samples and `/clock` out.
+//!
+//! The rig has its own watchdog, as a real rig controller does: when setpoints stop coming (the
+//! sequencer died, or a lockstep answer never came) it holds zero slip at the present load and
+//! speed instead of running on with the last slip it was told. Lost or malformed setpoints are
+//! counted and announced on `/diagnostics` (`node_runtime::LossWatch`).
 
 use futures::StreamExt;
-use node_runtime::{RosNode, RuntimeError, Shutdown, SuiteTopic};
+use node_runtime::{LossWatch, RosNode, RuntimeError, Shutdown, SuiteTopic};
 use rigsim::{RigConfig, VirtualRig};
 use serde::Deserialize;
 use std::{path::PathBuf, time::Duration};
-use tyre_msgs::{RigSample, RigSetpoint, rosgraph_msgs::Clock};
+use tyre_msgs::{
+    RigSample, RigSetpoint,
+    diagnostic_msgs::{DiagnosticArray, DiagnosticStatus},
+    rosgraph_msgs::Clock,
+    std_msgs::Header,
+};
 
 /// How simulated time advances.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Deserialize)]
@@ -30,6 +40,9 @@ pub struct VirtualRigNodeConfig {
     /// Noise seed (default: the config's).
     #[serde(default)]
     pub seed: Option<u64>,
+    /// RigSample rate replacing the config's (e.g. 1000 for a 1 kHz rig) [Hz].
+    #[serde(default)]
+    pub publish_rate_hz: Option<u32>,
     #[serde(default = "default_clock")]
     pub clock: ClockMode,
     /// Lockstep: how long to wait for the sequencer's answer before going on [s of wall time].
@@ -45,6 +58,28 @@ pub struct VirtualRigNodeConfig {
     /// faster; every node follows `/clock` and message stamps, none the wall clock).
     #[serde(default = "default_time_scale")]
     pub time_scale: f64,
+    /// Realtime clock: wall time without a setpoint (once setpoints have come) after which the
+    /// rig holds zero slip by itself [s]. Lockstep: a missed answer does the same.
+    #[serde(default = "default_setpoint_timeout")]
+    pub setpoint_timeout_s: f64,
+}
+
+fn default_setpoint_timeout() -> f64 {
+    0.5
+}
+
+/// What the rig's watchdog holds: the last setpoint without slip (load, speed, pressure and
+/// camber stay, so the tyre neither unloads nor heats).
+pub fn zero_slip_hold(last: &RigSetpoint) -> RigSetpoint {
+    let mut hold = last.clone();
+    hold.slip_angle_deg = 0.0;
+    hold.slip_ratio = 0.0;
+    hold.belt_displacement_m = 0.0;
+    hold.sweep_name = String::new();
+    if hold.mode == RigSetpoint::MODE_STATIC {
+        hold.mode = RigSetpoint::MODE_FREE_ROLLING;
+    }
+    hold
 }
 
 fn default_time_scale() -> f64 {
@@ -63,6 +98,7 @@ impl VirtualRigNodeConfig {
         };
         positive("time_scale", self.time_scale)?;
         positive("lockstep_timeout_s", self.lockstep_timeout_s)?;
+        positive("setpoint_timeout_s", self.setpoint_timeout_s)?;
         if !(self.start_delay_s.is_finite() && self.start_delay_s >= 0.0) {
             return Err(VirtualRigNodeError::Config {
                 key: "start_delay_s",
@@ -103,6 +139,10 @@ pub fn build_rig(cfg: &VirtualRigNodeConfig) -> Result<VirtualRig, VirtualRigNod
     if let Some(t) = &cfg.tyre {
         rc.tyre_file = t.clone();
     }
+    if let Some(r) = cfg.publish_rate_hz {
+        rc.publish_rate_hz = r;
+        rc.validate().map_err(|(key, detail)| VirtualRigNodeError::Rig(format!("publish_rate_hz: {key}: {detail}")))?;
+    }
     if let Some(e) = &cfg.effects {
         rc.effects = rigsim::Effects::parse(e).map_err(|e| VirtualRigNodeError::Rig(format!("effects: {e}")))?;
     }
@@ -119,16 +159,45 @@ pub async fn run(mut node: RosNode, cfg: VirtualRigNodeConfig, shutdown: Shutdow
     let samples = node.publisher::<RigSample>(SuiteTopic::RigSample)?;
     let clock = node.publisher::<Clock>(SuiteTopic::Clock)?;
     let setpoints = node.subscription::<RigSetpoint>(SuiteTopic::RigSetpoint)?;
+    let diagnostics = node.publisher::<DiagnosticArray>(SuiteTopic::Diagnostics)?;
     let mut setpoint_stream = Box::pin(setpoints.async_stream());
-    // A reliable writer whose history is full (a slow subscriber) reports WouldBlock after its
-    // wait: that is back-pressure, not a fault — the rig holds the sample and tries again, and
-    // gives up only after ~10 s of refusals (a subscriber that is gone for good).
+    let setpoint_topic = node.topic_name(SuiteTopic::RigSetpoint);
+    let node_name = node.name().to_owned();
+    let mut loss = LossWatch::new(node.name());
+    // The watchdog: the last setpoint, when it came, and whether the rig holds by itself.
+    let mut last_setpoint: Option<(RigSetpoint, std::time::Instant)> = None;
+    let mut holding = false;
+    let setpoint_timeout = Duration::from_secs_f64(cfg.setpoint_timeout_s);
+    let hold = |rig: &mut VirtualRig, last: &RigSetpoint, why: &str, stamp| {
+        tracing::warn!("{why}: holding zero slip");
+        if let Err(refusal) = rig.apply_setpoint(&zero_slip_hold(last)) {
+            tracing::warn!("zero-slip hold refused: {refusal}");
+        }
+        let status = DiagnosticStatus {
+            level: DiagnosticStatus::ERROR,
+            name: format!("{node_name}: setpoint_watchdog"),
+            message: format!("{why}: the rig holds zero slip"),
+            hardware_id: "virtual rig".into(),
+            values: Vec::new(),
+        };
+        let _ = diagnostics
+            .publish(DiagnosticArray { header: Header { stamp, frame_id: String::new() }, status: vec![status] });
+    };
+    // A reliable writer whose send window is full (a reader that stopped acknowledging: killed,
+    // stopped, far behind) refuses the sample after at most 1 ms (`Qos::Stream`). The rig never
+    // waits on its readers: the sample is dropped, and every reader sees the gap in
+    // RigSample.seq and reports it.
+    let refused = std::sync::atomic::AtomicU64::new(0);
     let publish = |s: &RigSample| -> Result<(), VirtualRigNodeError> {
-        let mut tries = 0u32;
-        while let Err(e) = samples.publish(s.clone()) {
-            tries += 1;
-            if tries >= 50 {
-                return Err(VirtualRigNodeError::Publish { topic: "sample", detail: format!("{e:?}") });
+        if let Err(e) = samples.publish(s.clone()) {
+            let n = refused.fetch_add(1, std::sync::atomic::Ordering::Relaxed) + 1;
+            if n <= 5 || n.is_multiple_of(1000) {
+                tracing::warn!(
+                    "sample seq {} refused by the writer ({} so far): {}",
+                    s.seq,
+                    n,
+                    format!("{e:?}").chars().take(60).collect::<String>()
+                );
             }
         }
         let _ = clock.publish(Clock { clock: s.header.stamp });
@@ -168,32 +237,65 @@ pub async fn run(mut node: RosNode, cfg: VirtualRigNodeConfig, shutdown: Shutdow
         match cfg.clock {
             ClockMode::Realtime => {
                 // Take whatever setpoints arrived meanwhile, newest last.
-                while let Some(Some(Ok((sp, _)))) = futures::FutureExt::now_or_never(setpoint_stream.next()) {
-                    apply(&mut rig, &sp);
+                while let Some(Some(item)) = futures::FutureExt::now_or_never(setpoint_stream.next()) {
+                    match item {
+                        Ok((sp, info)) => {
+                            loss.on_message(&setpoint_topic, &info, None);
+                            apply(&mut rig, &sp);
+                            last_setpoint = Some((sp, std::time::Instant::now()));
+                            holding = false;
+                        }
+                        Err(e) => loss.on_read_error(&setpoint_topic, &e),
+                    }
+                }
+                if !holding
+                    && let Some((sp, at)) = &last_setpoint
+                    && at.elapsed() >= setpoint_timeout
+                {
+                    hold(&mut rig, sp, &format!("no setpoint for {:.1} s", at.elapsed().as_secs_f64()), t);
+                    holding = true;
                 }
             }
             ClockMode::Lockstep => {
                 // Wait for the answer to this sample (setpoint stamped >= its time).
                 let deadline = tokio::time::Instant::now() + Duration::from_secs_f64(cfg.lockstep_timeout_s);
+                let mut answered = false;
                 loop {
                     tokio::select! {
                         _ = shutdown.wait() => break,
                         _ = tokio::time::sleep_until(deadline) => break,
                         item = setpoint_stream.next() => match item {
-                            Some(Ok((sp, _))) => {
-                                let answered = sp.header.stamp >= t;
+                            Some(Ok((sp, info))) => {
+                                loss.on_message(&setpoint_topic, &info, None);
+                                answered = sp.header.stamp >= t;
                                 apply(&mut rig, &sp);
+                                last_setpoint = Some((sp, std::time::Instant::now()));
+                                holding = false;
                                 if answered {
                                     break;
                                 }
                             }
-                            Some(Err(e)) => tracing::warn!("setpoint receive error: {e:?}"),
+                            Some(Err(e)) => loss.on_read_error(&setpoint_topic, &e),
                             None => break,
                         }
                     }
                 }
+                if !answered
+                    && !holding
+                    && !shutdown.is_triggered()
+                    && let Some((sp, _)) = &last_setpoint
+                {
+                    let why = format!(
+                        "no answer to the sample at {:.3} s within {} s",
+                        t.as_secs_f64(),
+                        cfg.lockstep_timeout_s
+                    );
+                    hold(&mut rig, sp, &why, t);
+                    holding = true;
+                }
             }
         }
+        loss.announce(&diagnostics, t);
     }
     Ok(())
 }

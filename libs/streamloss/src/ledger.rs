@@ -1,0 +1,181 @@
+//! [`LossLedger`]: every stream one node listens to.
+
+use crate::record::{LossReport, StreamLoss};
+use crate::tracker::{Observation, SeqTracker};
+use std::collections::BTreeMap;
+
+/// Which sequence number a tracker follows.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord, Hash)]
+pub enum SeqSource {
+    /// The DDS writer's sequence number (every topic): what the transport or the reader lost.
+    Dds,
+    /// The message's own counter (`RigSample.seq`): what was lost anywhere after the rig made
+    /// the sample, publisher side included.
+    Message,
+}
+
+impl SeqSource {
+    pub fn as_str(self) -> &'static str {
+        match self {
+            SeqSource::Dds => "dds",
+            SeqSource::Message => "msg",
+        }
+    }
+
+    pub fn parse(s: &str) -> Option<Self> {
+        match s {
+            "dds" => Some(SeqSource::Dds),
+            "msg" => Some(SeqSource::Message),
+            _ => None,
+        }
+    }
+}
+
+/// One stream: a topic, a writer on it, and which sequence number.
+#[derive(Debug, Clone, PartialEq, Eq, PartialOrd, Ord, Hash)]
+pub struct StreamKey {
+    pub topic: String,
+    /// The writer's id (DDS GUID as 128 bits).
+    pub writer: u128,
+    pub source: SeqSource,
+}
+
+#[derive(Debug, Clone, Default)]
+struct TopicEntry {
+    streams: BTreeMap<(u128, SeqSource), SeqTracker>,
+    malformed: u64,
+}
+
+/// Writers per topic a ledger follows at most; messages of further writers are counted under
+/// one catch-all writer id 0, so a peer inventing writers cannot grow a node's memory.
+pub const MAX_WRITERS_PER_TOPIC: usize = 64;
+
+/// Every stream one node receives, with its losses and its malformed messages.
+#[derive(Debug, Clone, Default)]
+pub struct LossLedger {
+    topics: BTreeMap<String, TopicEntry>,
+    lost_total: u64,
+    malformed_total: u64,
+}
+
+impl LossLedger {
+    pub fn new() -> Self {
+        Self::default()
+    }
+
+    fn entry(&mut self, topic: &str) -> &mut TopicEntry {
+        // Look up by &str first: the hot path allocates nothing.
+        if !self.topics.contains_key(topic) {
+            self.topics.insert(topic.to_owned(), TopicEntry::default());
+        }
+        self.topics.get_mut(topic).expect("inserted above")
+    }
+
+    /// Records sequence number `seq` of `writer` on `topic`.
+    pub fn observe(&mut self, topic: &str, writer: u128, source: SeqSource, seq: u64) -> Observation {
+        let entry = self.entry(topic);
+        let writer = if entry.streams.contains_key(&(writer, source))
+            || entry.streams.keys().filter(|(_, s)| *s == source).count() < MAX_WRITERS_PER_TOPIC
+        {
+            writer
+        } else {
+            0
+        };
+        let obs = entry.streams.entry((writer, source)).or_default().observe(seq);
+        if let Observation::Gap(g) = obs {
+            self.lost_total = self.lost_total.saturating_add(g.len());
+        }
+        obs
+    }
+
+    /// Counts a message on `topic` that arrived but could not be decoded; returns the topic's
+    /// count so far.
+    pub fn malformed(&mut self, topic: &str) -> u64 {
+        self.malformed_total = self.malformed_total.saturating_add(1);
+        let e = self.entry(topic);
+        e.malformed = e.malformed.saturating_add(1);
+        e.malformed
+    }
+
+    /// Messages lost on every stream so far (both sources).
+    pub fn lost_total(&self) -> u64 {
+        self.lost_total
+    }
+
+    /// Malformed messages so far.
+    pub fn malformed_total(&self) -> u64 {
+        self.malformed_total
+    }
+
+    /// The tracker of one stream, if it has seen anything.
+    pub fn tracker(&self, key: &StreamKey) -> Option<&SeqTracker> {
+        self.topics.get(&key.topic)?.streams.get(&(key.writer, key.source))
+    }
+
+    /// The ledger as a report (`complete` says whether the node is done receiving).
+    pub fn report(&self, complete: bool) -> LossReport {
+        let mut streams = Vec::new();
+        let mut malformed = BTreeMap::new();
+        for (topic, e) in &self.topics {
+            if e.malformed > 0 {
+                malformed.insert(topic.clone(), e.malformed);
+            }
+            for (&(writer, source), t) in &e.streams {
+                streams.push(StreamLoss {
+                    topic: topic.clone(),
+                    writer,
+                    source,
+                    received: t.received(),
+                    lost: t.lost(),
+                    late: t.late(),
+                    first_seq: t.first_seq().unwrap_or(0),
+                    last_seq: t.last_seq().unwrap_or(0),
+                    gaps: t.gaps().to_vec(),
+                    gaps_total: t.gaps_total(),
+                });
+            }
+        }
+        LossReport { complete, streams, malformed }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::Gap;
+
+    #[test]
+    fn writers_and_sources_are_separate_streams() {
+        let mut l = LossLedger::new();
+        l.observe("/rig/sample", 1, SeqSource::Dds, 1);
+        l.observe("/rig/sample", 1, SeqSource::Dds, 3);
+        l.observe("/rig/sample", 2, SeqSource::Dds, 10);
+        l.observe("/rig/sample", 1, SeqSource::Message, 0);
+        l.observe("/rig/sample", 1, SeqSource::Message, 1);
+        assert_eq!(l.lost_total(), 1);
+        let key = StreamKey { topic: "/rig/sample".into(), writer: 1, source: SeqSource::Dds };
+        assert_eq!(l.tracker(&key).map(|t| t.gaps().to_vec()), Some(vec![Gap { first: 2, last: 2 }]));
+        assert_eq!(l.report(false).streams.len(), 3);
+    }
+
+    #[test]
+    fn invented_writers_share_one_catch_all_stream() {
+        let mut l = LossLedger::new();
+        for w in 1..=1000u128 {
+            l.observe("/rig/sample", w, SeqSource::Dds, 1);
+        }
+        let r = l.report(true);
+        assert_eq!(r.streams.len(), MAX_WRITERS_PER_TOPIC + 1);
+        assert!(r.streams.iter().any(|s| s.writer == 0));
+    }
+
+    #[test]
+    fn malformed_counts_per_topic() {
+        let mut l = LossLedger::new();
+        assert_eq!(l.malformed("/rig/sample"), 1);
+        assert_eq!(l.malformed("/rig/sample"), 2);
+        l.malformed("/rig/setpoint");
+        assert_eq!(l.malformed_total(), 3);
+        assert_eq!(l.report(true).malformed.get("/rig/sample"), Some(&2));
+    }
+}
