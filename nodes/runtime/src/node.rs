@@ -1,6 +1,6 @@
 //! [`RosNode`]: one DDS participant + one ROS 2 node, with typed endpoints from the topic table.
 
-use crate::{RuntimeConfig, RuntimeConfigError, SuiteTopic};
+use crate::{RuntimeConfig, RuntimeConfigError, SecurityConfigError, SuiteTopic};
 use ros2_client::{
     Context, ContextOptions, MessageTypeName, Name, Node, NodeName, NodeOptions, Publisher, Subscription,
 };
@@ -11,6 +11,8 @@ use tyre_msgs::RosMessage;
 pub enum RuntimeError {
     #[error(transparent)]
     Config(#[from] RuntimeConfigError),
+    #[error(transparent)]
+    Security(#[from] SecurityConfigError),
     #[error("node {node:?}: could not create the DDS participant on domain {domain_id}: {detail}")]
     Participant { node: String, domain_id: u16, detail: String },
     #[error("node {node:?}: invalid node name or namespace: {detail}")]
@@ -43,12 +45,20 @@ impl std::fmt::Debug for RosNode {
 }
 
 impl RosNode {
-    /// Creates a participant on the configured domain and a node `name` under the namespace.
+    /// Creates a participant on the configured domain and a node `name` under the namespace;
+    /// with `cfg.security`, a secured participant authenticating as the node's enclave.
     pub fn new(name: &str, cfg: &RuntimeConfig) -> Result<Self, RuntimeError> {
         cfg.validate()?;
         let domain_id = cfg.resolved_domain_id()?;
-        let context = Context::with_options(ContextOptions::new().domain_id(domain_id))
-            .map_err(|e| RuntimeError::Participant { node: name.to_owned(), domain_id, detail: format!("{e:?}") })?;
+        let mut options = ContextOptions::new().domain_id(domain_id);
+        if let Some(sec) = &cfg.security {
+            options = crate::security::secure(options, sec, name, &cfg.namespace)?;
+        }
+        let context = Context::with_options(options).map_err(|e| RuntimeError::Participant {
+            node: name.to_owned(),
+            domain_id,
+            detail: format!("{e:?}"),
+        })?;
         let node_name = NodeName::new(&cfg.namespace, name)
             .map_err(|e| RuntimeError::Name { node: name.to_owned(), detail: format!("{e:?}") })?;
         let mut node = context
