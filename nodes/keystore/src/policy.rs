@@ -16,9 +16,11 @@ use crate::{EnclaveName, Role};
 use node_runtime::SuiteTopic;
 use std::fmt::Write as _;
 
-/// Domains the documents cover: every domain id the runtime accepts (0..=232).
-const DOMAIN_MIN: u16 = 0;
-const DOMAIN_MAX: u16 = 232;
+/// Domains the documents cover: every domain id the DDS Security schemas allow (0..=230; the
+/// runtime's plain limit of 232 is not a valid `DomainId` there, and Cyclone DDS refuses the
+/// whole document over it).
+pub const DOMAIN_MIN: u16 = 0;
+pub const DOMAIN_MAX: u16 = 230;
 
 /// How a topic (or all topics) is protected on the wire.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -195,6 +197,12 @@ fn civil_from_days(days: i64) -> (i64, u32, u32) {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn documents_cover_exactly_the_domains_a_secured_node_joins() {
+        assert_eq!(DOMAIN_MAX, node_runtime::security::MAX_SECURE_DOMAIN);
+        assert!(governance_xml().contains("<max>230</max>"));
+    }
 
     #[test]
     fn dates() {

@@ -47,7 +47,14 @@ pub enum SecurityConfigError {
          rebuild with `cargo build --release --features security` (needs OpenSSL's headers: libssl-dev)"
     )]
     NotBuiltWithSecurity { node: String },
+    #[error(
+        "node {node:?}: domain {domain_id}: a secured domain must be 0..={MAX_SECURE_DOMAIN} (DDS Security schemas)"
+    )]
+    DomainOutOfRange { node: String, domain_id: u16 },
 }
+
+/// The largest domain id the DDS Security governance and permissions schemas allow.
+pub const MAX_SECURE_DOMAIN: u16 = 230;
 
 impl SecurityConfig {
     /// A config using `keystore` with the default enclave for every node.
@@ -104,7 +111,11 @@ pub(crate) fn secure(
     cfg: &SecurityConfig,
     node: &str,
     namespace: &str,
+    domain_id: u16,
 ) -> Result<ros2_client::ContextOptions, SecurityConfigError> {
+    if domain_id > MAX_SECURE_DOMAIN {
+        return Err(SecurityConfigError::DomainOutOfRange { node: node.to_owned(), domain_id });
+    }
     let dir = cfg.enclave_dir(node, namespace)?;
     tracing::debug!(node, enclave = %dir.display(), "DDS Security on");
     // SROS2 keys are unencrypted PKCS#8 (RustDDS reads no other); the password is unused.
@@ -117,6 +128,7 @@ pub(crate) fn secure(
     _cfg: &SecurityConfig,
     node: &str,
     _namespace: &str,
+    _domain_id: u16,
 ) -> Result<ros2_client::ContextOptions, SecurityConfigError> {
     Err(SecurityConfigError::NotBuiltWithSecurity { node: node.to_owned() })
 }
