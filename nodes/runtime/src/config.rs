@@ -1,5 +1,6 @@
-//! Runtime configuration shared by every node: namespace and DDS domain.
+//! Runtime configuration shared by every node: namespace, DDS domain and DDS Security.
 
+use crate::SecurityConfig;
 use serde::Deserialize;
 
 /// Where a node lives on the DDS network.
@@ -12,6 +13,10 @@ pub struct RuntimeConfig {
     /// DDS domain id; when absent, `ROS_DOMAIN_ID` is used, else 0 (the ROS convention).
     #[serde(default)]
     pub domain_id: Option<u16>,
+    /// DDS Security (the launch file's top-level `[security]` section, not a `[runtime]` key):
+    /// `None` joins the domain as plain DDS.
+    #[serde(skip)]
+    pub security: Option<SecurityConfig>,
 }
 
 fn default_namespace() -> String {
@@ -20,7 +25,7 @@ fn default_namespace() -> String {
 
 impl Default for RuntimeConfig {
     fn default() -> Self {
-        Self { namespace: default_namespace(), domain_id: None }
+        Self { namespace: default_namespace(), domain_id: None, security: None }
     }
 }
 
@@ -80,20 +85,20 @@ mod tests {
     #[test]
     fn namespaces() {
         for good in ["/", "/rig", "/lab_2/rig"] {
-            let c = RuntimeConfig { namespace: good.into(), domain_id: None };
+            let c = RuntimeConfig { namespace: good.into(), ..Default::default() };
             assert_eq!(c.validate(), Ok(()), "{good}");
         }
         for bad in ["rig", "/rig/", "//rig", "/rig-1", "/1rig"] {
-            let c = RuntimeConfig { namespace: bad.into(), domain_id: None };
+            let c = RuntimeConfig { namespace: bad.into(), ..Default::default() };
             assert!(c.validate().is_err(), "{bad}");
         }
     }
 
     #[test]
     fn domain_from_config_wins_and_is_checked() {
-        let c = RuntimeConfig { namespace: "/rig".into(), domain_id: Some(7) };
+        let c = RuntimeConfig { domain_id: Some(7), ..Default::default() };
         assert_eq!(c.resolved_domain_id(), Ok(7));
-        let c = RuntimeConfig { namespace: "/rig".into(), domain_id: Some(300) };
+        let c = RuntimeConfig { domain_id: Some(300), ..Default::default() };
         assert!(c.resolved_domain_id().is_err());
     }
 }

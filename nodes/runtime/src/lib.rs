@@ -2,6 +2,8 @@
 //!
 //! What a node gets from here:
 //! - [`RuntimeConfig`]: namespace (default `/rig`) and domain id (config, else `ROS_DOMAIN_ID`, else 0);
+//! - [`security`]: DDS Security (SROS2 keystore, an enclave per node), when the launch file has a
+//!   `[security]` section; needs the cargo feature `security` (off by default);
 //! - [`topics`]: the suite's topic table — every topic's relative name, message type and QoS preset,
 //!   shared by publishers, subscribers, the recorder and replay so their QoS always match;
 //! - [`RosNode`]: one DDS participant and one ROS 2 node per suite node (two participants on one
@@ -18,11 +20,13 @@ pub mod config;
 pub mod logging;
 pub mod loss;
 pub mod node;
+pub mod security;
 pub mod shutdown;
 pub mod topics;
 
 pub use config::{RuntimeConfig, RuntimeConfigError};
 pub use loss::LossWatch;
 pub use node::{RosNode, RuntimeError};
+pub use security::{SecurityConfig, SecurityConfigError};
 pub use shutdown::Shutdown;
 pub use topics::{Qos, SuiteTopic, TopicSpec};

@@ -1,6 +1,6 @@
 //! [`RosNode`]: one DDS participant + one ROS 2 node, with typed endpoints from the topic table.
 
-use crate::{RuntimeConfig, RuntimeConfigError, SuiteTopic};
+use crate::{RuntimeConfig, RuntimeConfigError, SecurityConfigError, SuiteTopic};
 use ros2_client::{
     Context, ContextOptions, MessageTypeName, Name, Node, NodeName, NodeOptions, Publisher, Subscription,
 };
@@ -11,6 +11,8 @@ use tyre_msgs::RosMessage;
 pub enum RuntimeError {
     #[error(transparent)]
     Config(#[from] RuntimeConfigError),
+    #[error(transparent)]
+    Security(#[from] SecurityConfigError),
     #[error("node {node:?}: could not create the DDS participant on domain {domain_id}: {detail}")]
     Participant { node: String, domain_id: u16, detail: String },
     #[error("node {node:?}: invalid node name or namespace: {detail}")]
@@ -43,28 +45,47 @@ impl std::fmt::Debug for RosNode {
 }
 
 impl RosNode {
-    /// Creates a participant on the configured domain and a node `name` under the namespace.
+    /// Creates a participant on the configured domain and a node `name` under the namespace;
+    /// with `cfg.security`, a secured participant authenticating as the node's enclave.
     pub fn new(name: &str, cfg: &RuntimeConfig) -> Result<Self, RuntimeError> {
         cfg.validate()?;
         let domain_id = cfg.resolved_domain_id()?;
-        let context = Context::with_options(ContextOptions::new().domain_id(domain_id))
-            .map_err(|e| RuntimeError::Participant { node: name.to_owned(), domain_id, detail: format!("{e:?}") })?;
+        let mut options = ContextOptions::new().domain_id(domain_id);
+        if let Some(sec) = &cfg.security {
+            options = crate::security::secure(options, sec, name, &cfg.namespace, domain_id)?;
+        }
+        let context = Context::with_options(options).map_err(|e| RuntimeError::Participant {
+            node: name.to_owned(),
+            domain_id,
+            detail: format!("{e:?}"),
+        })?;
         let node_name = NodeName::new(&cfg.namespace, name)
             .map_err(|e| RuntimeError::Name { node: name.to_owned(), detail: format!("{e:?}") })?;
         let mut node = context
             .new_node(node_name, NodeOptions::new().enable_rosout(false))
             .map_err(|e| RuntimeError::Participant { node: name.to_owned(), domain_id, detail: format!("{e:?}") })?;
-        match node.spinner() {
-            Ok(spinner) => {
-                tokio::spawn(async move {
-                    if let Err(e) = spinner.spin().await {
-                        tracing::warn!("ROS 2 spinner stopped: {e:?}");
-                    }
-                });
+        // The spinner serves parameter services and graph events, and subscribes to `/clock`.
+        // Secured participants run without it: with RustDDS 0.15.1 a participant may have only
+        // one reader per topic matched to a secured writer (the crypto plugin keys the second
+        // reader's key material by (remote participant, writer) too, refuses it, and the writer
+        // then fails every send), and the spinner's `/clock` reader would be the second one in
+        // any node that records `/clock`. The suite's nodes declare no parameters.
+        if cfg.security.is_some() {
+            tracing::debug!(node = name, "secured participant: no ROS 2 spinner");
+        } else {
+            match node.spinner() {
+                Ok(spinner) => {
+                    tokio::spawn(async move {
+                        if let Err(e) = spinner.spin().await {
+                            tracing::warn!("ROS 2 spinner stopped: {e:?}");
+                        }
+                    });
+                }
+                Err(e) => tracing::warn!("node {name}: no ROS 2 spinner ({e:?}); graph events unavailable"),
             }
-            Err(e) => tracing::warn!("node {name}: no ROS 2 spinner ({e:?}); graph events unavailable"),
         }
-        tracing::debug!(node = name, namespace = %cfg.namespace, domain_id, "node up");
+        let guid = rustdds_guid(&context);
+        tracing::debug!(node = name, namespace = %cfg.namespace, domain_id, participant = ?guid.prefix, "node up");
         Ok(Self { node, name: name.to_owned(), namespace: cfg.namespace.clone(), domain_id, _context: context })
     }
 
@@ -149,4 +170,15 @@ impl RosNode {
     pub fn ros_node(&self) -> &Node {
         &self.node
     }
+
+    /// How many subscriptions to a suite topic this participant has discovered (other
+    /// participants'; works with and without a spinner).
+    pub fn discovered_subscriptions(&self, topic: SuiteTopic) -> usize {
+        self.node.subscription_count(&self.topic_name(topic))
+    }
+}
+
+fn rustdds_guid(context: &Context) -> ros2_client::dds::rustdds::GUID {
+    use ros2_client::dds::rustdds::RTPSEntity as _;
+    context.domain_participant().guid()
 }

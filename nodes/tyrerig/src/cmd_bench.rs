@@ -14,6 +14,9 @@ pub enum BenchCmd {
         rate_hz: f64,
         #[arg(long, default_value_t = 10.0)]
         seconds: f64,
+        /// With DDS Security (a throwaway keystore; governance and roles as the suite's).
+        #[arg(long)]
+        secure: bool,
     },
     /// A rig sample's way through the whole suite: from the rig's write of a sample to the
     /// LiveChannels, the ThermalState and the RigSetpoint computed from it, with every node
@@ -39,6 +42,9 @@ pub enum BenchCmd {
         seconds: f64,
         #[arg(long, default_value = "out/bench_recorder.mcap")]
         out: std::path::PathBuf,
+        /// With DDS Security (a throwaway keystore; governance and roles as the suite's).
+        #[arg(long)]
+        secure: bool,
     },
     /// The foxglove node (its own process) serving RigSamples to N WebSocket clients: delivered
     /// msg/s, latency against a plain DDS subscriber, and the node's CPU.
@@ -61,6 +67,52 @@ pub enum BenchCmd {
 pub(crate) fn wall_ns() -> f64 {
     let d = SystemTime::now().duration_since(SystemTime::UNIX_EPOCH).unwrap_or_default();
     d.as_secs_f64() * 1e9
+}
+
+/// A keystore for one secured benchmark run, in the temp directory, removed afterwards.
+#[derive(Debug)]
+struct BenchKeystore(std::path::PathBuf);
+
+impl Drop for BenchKeystore {
+    fn drop(&mut self) {
+        let _ = std::fs::remove_dir_all(&self.0);
+    }
+}
+
+/// The runtime config of the benchmark's nodes: plain, or secured with a fresh keystore whose
+/// enclaves are the bench nodes' (publisher = rig, subscriber = monitor, recorder = recorder).
+/// Prints how long the keystore took to make.
+#[cfg(feature = "security")]
+fn bench_config(secure: bool) -> anyhow::Result<(RuntimeConfig, Option<BenchKeystore>)> {
+    use keystore::{EnclaveName, Keystore, Role};
+    if !secure {
+        return Ok((RuntimeConfig::default(), None));
+    }
+    let dir = BenchKeystore(std::env::temp_dir().join(format!("tyrerig-bench-keystore-{}", std::process::id())));
+    let now_s = SystemTime::now().duration_since(SystemTime::UNIX_EPOCH).unwrap_or_default().as_secs() as i64;
+    let t = Instant::now();
+    let ks = Keystore::create(&dir.0, now_s)?;
+    let ks_ms = t.elapsed().as_secs_f64() * 1e3;
+    let t = Instant::now();
+    let enclaves =
+        [("/rig/bench_pub", Role::Rig), ("/rig/bench_sub", Role::Monitor), ("/rig/bench_recorder", Role::Recorder)];
+    for (name, role) in enclaves {
+        ks.create_enclave(&EnclaveName::parse(name)?, role, now_s)?;
+    }
+    let enclave_ms = t.elapsed().as_secs_f64() * 1e3 / enclaves.len() as f64;
+    println!("keystore: CAs and governance in {ks_ms:.1} ms, {enclave_ms:.1} ms per enclave");
+    let cfg = RuntimeConfig { security: Some(node_runtime::SecurityConfig::new(&dir.0)), ..Default::default() };
+    Ok((cfg, Some(dir)))
+}
+
+#[cfg(not(feature = "security"))]
+fn bench_config(secure: bool) -> anyhow::Result<(RuntimeConfig, Option<BenchKeystore>)> {
+    if secure {
+        anyhow::bail!(
+            "--secure: this tyrerig was built without DDS Security (cargo build --release --features security)"
+        );
+    }
+    Ok((RuntimeConfig::default(), None))
 }
 
 fn wall_time() -> Time {
@@ -88,7 +140,9 @@ pub(crate) fn percentile(sorted: &[f64], p: f64) -> f64 {
 
 pub fn run(cmd: BenchCmd) -> anyhow::Result<()> {
     let rt = tokio::runtime::Builder::new_multi_thread().enable_all().build().context("tokio")?;
-    let cfg = RuntimeConfig::default();
+    let secure = matches!(cmd, BenchCmd::DdsLatency { secure: true, .. } | BenchCmd::Recorder { secure: true, .. });
+    let (cfg, _keystore) = bench_config(secure)?;
+    let security = if secure { "secured" } else { "plain" };
     match cmd {
         BenchCmd::Foxglove { clients, rate_hz, seconds, port } => {
             rt.block_on(crate::bench_foxglove::run(clients, rate_hz, seconds, port))
@@ -96,7 +150,7 @@ pub fn run(cmd: BenchCmd) -> anyhow::Result<()> {
         BenchCmd::SuiteLatency { rate_hz, seconds, processes, launch_config } => {
             rt.block_on(suite_latency(rate_hz, seconds, processes, &launch_config))
         }
-        BenchCmd::DdsLatency { rate_hz, seconds } => rt.block_on(async {
+        BenchCmd::DdsLatency { rate_hz, seconds, .. } => rt.block_on(async {
             let mut a = RosNode::new("bench_pub", &cfg)?;
             let mut b = RosNode::new("bench_sub", &cfg)?;
             let publisher = a.publisher::<RigSample>(SuiteTopic::RigSample)?;
@@ -133,7 +187,7 @@ pub fn run(cmd: BenchCmd) -> anyhow::Result<()> {
             let mut lat = receiver.await?;
             lat.sort_by(f64::total_cmp);
             println!(
-                "DDS one-way latency, RigSample at {rate_hz} Hz for {seconds} s, two participants: \
+                "DDS one-way latency, RigSample at {rate_hz} Hz for {seconds} s, two {security} participants: \
                  received {}/{total}; p50 {:.0} us, p99 {:.0} us, max {:.0} us",
                 lat.len(),
                 percentile(&lat, 0.5),
@@ -142,7 +196,7 @@ pub fn run(cmd: BenchCmd) -> anyhow::Result<()> {
             );
             anyhow::Ok(())
         }),
-        BenchCmd::Recorder { rate_hz, seconds, out } => rt.block_on(async {
+        BenchCmd::Recorder { rate_hz, seconds, out, .. } => rt.block_on(async {
             let shutdown = Shutdown::new();
             let mut rec_cfg = recorder::RecorderConfig::to_file(&out);
             rec_cfg.topics = Some(vec!["sample".into()]);
@@ -198,7 +252,7 @@ pub fn run(cmd: BenchCmd) -> anyhow::Result<()> {
             let first = samples.first().map_or(0, |(_, s)| s.seq);
             let after_last = samples.last().map_or(seq, |(_, s)| seq.saturating_sub(1).saturating_sub(s.seq));
             println!(
-                "recorder through DDS, {}: published {seq} in {publish_s:.1} s ({:.0} msg/s), {refused} refused by the writer",
+                "recorder through {security} DDS, {}: published {seq} in {publish_s:.1} s ({:.0} msg/s), {refused} refused by the writer",
                 if rate_hz > 0.0 { format!("{rate_hz} Hz") } else { "flat out".into() },
                 seq as f64 / publish_s
             );

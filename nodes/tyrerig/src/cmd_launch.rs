@@ -57,6 +57,7 @@ pub fn run_launch(args: LaunchArgs) -> anyhow::Result<()> {
     if file.nodes.is_empty() {
         anyhow::bail!("{}: no [[node]] entries", args.file.display());
     }
+    file.check_enclaves(&args.file)?;
     if args.processes {
         return run_processes(&args.file, &file);
     }

@@ -65,7 +65,7 @@ pub fn run(args: ReplayArgs) -> anyhow::Result<()> {
         .clone()
         .or_else(|| log.metadata().get("tyrerig").and_then(|m| m.get("namespace")).cloned())
         .unwrap_or_else(|| RuntimeConfig::default().namespace);
-    let runtime = RuntimeConfig { namespace, domain_id: args.domain_id };
+    let runtime = RuntimeConfig { namespace, domain_id: args.domain_id, ..Default::default() };
     let opts = ReplayOptions {
         speed: if args.max_speed { None } else { Some(args.speed) },
         topics: args.topics.clone(),

@@ -61,6 +61,13 @@ pub struct RunArgs {
     /// Commands Foxglove clients may send on procedure/command (e.g. PAUSE,RESUME); none by default.
     #[arg(long, value_delimiter = ',', requires = "foxglove")]
     pub foxglove_allow: Vec<String>,
+    /// Over DDS: at most this many times real time (default: as fast as the nodes answer).
+    #[arg(long, conflicts_with = "headless")]
+    pub max_speed: Option<f64>,
+    /// DDS Security (not with --headless): the SROS2 keystore holding the enclaves /rig/recorder,
+    /// /rig/thermal, /rig/sequencer, /rig/quality, /rig/virtual_rig and /rig/run_watcher.
+    #[arg(long, conflicts_with = "headless")]
+    pub keystore: Option<PathBuf>,
 }
 
 /// A procedure by name, or a procedure file.
@@ -221,6 +228,11 @@ fn run_dds(args: &RunArgs) -> anyhow::Result<()> {
     if let Some(e) = &spec.effects {
         rig.push(("effects", V::String(e.clone())));
     }
+    // Thermal, sequencer, quality and recorder all read the samples: none may miss the start.
+    rig.push(("wait_for_subscribers", V::Integer(4)));
+    if let Some(m) = args.max_speed {
+        rig.push(("max_time_scale", V::Float(m)));
+    }
     let mut sequencer = vec![
         ("procedure", path_value(&spec.procedure_file)?),
         ("load_index", V::Integer(i64::from(inputs.load_index))),
@@ -274,7 +286,14 @@ fn run_dds(args: &RunArgs) -> anyhow::Result<()> {
         // Before the rig starts, so a browser sees the run from its first sample.
         nodes.insert(0, entry);
     }
-    let runtime = RuntimeConfig::default();
+    let runtime =
+        RuntimeConfig { security: args.keystore.clone().map(node_runtime::SecurityConfig::new), ..Default::default() };
+    if let Some(sec) = &runtime.security {
+        // Every participant's enclave must be there before any node starts.
+        for name in nodes.iter().map(|n| n.name.as_str()).chain(["run_watcher"]) {
+            sec.enclave_dir(name, &runtime.namespace)?;
+        }
+    }
     let wall = std::time::Instant::now();
     let rt = tokio::runtime::Builder::new_multi_thread().enable_all().build()?;
     let bar = if args.quiet { indicatif::ProgressBar::hidden() } else { indicatif::ProgressBar::new(1000) };

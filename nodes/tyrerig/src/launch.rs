@@ -5,6 +5,9 @@
 //! [runtime]                 # optional: namespace (default "/rig") and domain_id (else ROS_DOMAIN_ID)
 //! namespace = "/rig"
 //!
+//! [security]                # optional: DDS Security (docs/security.md); needs --features security
+//! keystore = "../out/keystore"   # each node authenticates as <namespace>/<node name>
+//!
 //! [[node]]
 //! name = "recorder"         # ROS node name, unique in the file
 //! kind = "recorder"         # which node (see NodeKind)
@@ -15,7 +18,7 @@
 //! can spread nodes over machines with one shared file.
 
 use anyhow::{Context as _, bail};
-use node_runtime::{RosNode, RuntimeConfig, Shutdown};
+use node_runtime::{RosNode, RuntimeConfig, SecurityConfig, Shutdown};
 use serde::Deserialize;
 use std::path::{Path, PathBuf};
 
@@ -25,6 +28,9 @@ use std::path::{Path, PathBuf};
 pub struct LaunchFile {
     #[serde(default)]
     pub runtime: RuntimeConfig,
+    /// `[security]`: copied into `runtime.security` (keystore resolved against the file) on load.
+    #[serde(default)]
+    pub security: Option<SecurityConfig>,
     #[serde(default, rename = "node")]
     pub nodes: Vec<NodeEntry>,
 }
@@ -96,6 +102,12 @@ impl LaunchFile {
             toml::from_str(text).map_err(|e| anyhow::anyhow!("{}: {}", path.display(), e.to_string().trim_end()))?;
         file.runtime.validate().map_err(|e| anyhow::anyhow!("{}: [runtime]: {e}", path.display()))?;
         let base = path.parent().unwrap_or(Path::new("."));
+        if let Some(sec) = &file.security {
+            if let Some(stray) = sec.enclaves.keys().find(|n| !file.nodes.iter().any(|e| &e.name == *n)) {
+                bail!("{}: [security.enclaves]: {stray:?} is not a node of this file", path.display());
+            }
+            file.runtime.security = Some(sec.clone().resolved_against(base));
+        }
         let mut seen = std::collections::BTreeSet::new();
         for n in &mut file.nodes {
             if NodeKind::parse(&n.kind).is_none() {
@@ -120,6 +132,18 @@ impl LaunchFile {
 
     pub fn node(&self, name: &str) -> Option<&NodeEntry> {
         self.nodes.iter().find(|n| n.name == name)
+    }
+
+    /// With `[security]`, checks every node has its enclave in the keystore, so a launch fails
+    /// before any node starts rather than half-way.
+    pub fn check_enclaves(&self, path: &Path) -> anyhow::Result<()> {
+        if let Some(sec) = &self.runtime.security {
+            for n in &self.nodes {
+                sec.enclave_dir(&n.name, &self.runtime.namespace)
+                    .map_err(|e| anyhow::anyhow!("{}: [security]: {e}", path.display()))?;
+            }
+        }
+        Ok(())
     }
 }
 
@@ -227,7 +251,7 @@ mod tests {
 
     #[test]
     fn the_shipped_launch_files_load() {
-        for name in ["demo.toml", "suite.toml"] {
+        for name in ["demo.toml", "suite.toml", "suite-secure.toml"] {
             let file = LaunchFile::load(&launch_config().join(name)).unwrap_or_else(|e| panic!("{name}: {e:#}"));
             assert!(!file.nodes.is_empty(), "{name}");
         }
@@ -235,6 +259,47 @@ mod tests {
         let kinds: Vec<_> = suite.nodes.iter().map(|n| n.kind.as_str()).collect();
         for k in ["recorder", "virtual_rig", "thermal", "sequencer", "quality", "foxglove"] {
             assert!(kinds.contains(&k), "suite.toml has no {k} node: {kinds:?}");
+        }
+        assert!(suite.runtime.security.is_none(), "the plain suite needs no keystore");
+    }
+
+    #[test]
+    fn the_secure_suite_is_the_suite_with_a_keystore() {
+        let plain = LaunchFile::load(&launch_config().join("suite.toml")).expect("suite.toml");
+        let secure = LaunchFile::load(&launch_config().join("suite-secure.toml")).expect("suite-secure.toml");
+        let names = |f: &LaunchFile| f.nodes.iter().map(|n| (n.name.clone(), n.kind.clone())).collect::<Vec<_>>();
+        assert_eq!(names(&plain), names(&secure));
+        let sec = secure.runtime.security.expect("[security]");
+        assert!(sec.keystore.is_absolute() || sec.keystore.starts_with(launch_config()), "{:?}", sec.keystore);
+        assert!(sec.keystore.ends_with("out/keystore"), "{:?}", sec.keystore);
+    }
+
+    #[test]
+    fn security_sections_are_checked() {
+        let dir = tempfile::tempdir().expect("tempdir");
+        let path = dir.path().join("s.toml");
+        let node = "[[node]]\nname = \"thermal\"\nkind = \"thermal\"\n";
+        std::fs::write(
+            &path,
+            format!("[security]\nkeystore = \"ks\"\n[security.enclaves]\nthermal = \"/rig/t\"\n{node}"),
+        )
+        .expect("write");
+        let file = LaunchFile::load(&path).expect("valid");
+        let sec = file.runtime.security.as_ref().expect("security");
+        assert_eq!(sec.keystore, dir.path().join("ks"));
+        let err = format!("{:#}", file.check_enclaves(&path).expect_err("no keystore"));
+        assert!(err.contains("s.toml") && err.contains("\"thermal\"") && err.contains("ks/enclaves/rig/t/"), "{err}");
+        for (body, expect) in [
+            (
+                "[security]\nkeystore = \"ks\"\n[security.enclaves]\nsequencer = \"/rig/s\"\n",
+                "\"sequencer\" is not a node",
+            ),
+            ("[security]\nkeystre = \"ks\"\n", "keystre"),
+            ("[runtime]\nsecurity = \"x\"\n", "security"),
+        ] {
+            std::fs::write(&path, format!("{body}{node}")).expect("write");
+            let err = format!("{:#}", LaunchFile::load(&path).expect_err(body));
+            assert!(err.contains("s.toml") && err.contains(expect), "{body}: {err}");
         }
     }
 

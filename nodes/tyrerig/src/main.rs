@@ -9,6 +9,7 @@ use clap::{Parser, Subcommand};
 // --- subcommand modules (one per capability) ---
 mod bench_foxglove;
 mod cmd_bench;
+mod cmd_command;
 mod cmd_data;
 mod cmd_doctor;
 mod cmd_export_ttc;
@@ -20,6 +21,7 @@ mod cmd_replay;
 mod cmd_report;
 mod cmd_rig;
 mod cmd_run;
+mod cmd_security;
 mod launch;
 
 #[derive(Debug, Parser)]
@@ -66,6 +68,12 @@ enum Command {
     /// Inspect and repair MCAP logs
     #[command(subcommand)]
     Mcap(cmd_mcap::McapCmd),
+    /// DDS Security: SROS2 keystores and enclaves (build with --features security)
+    #[command(subcommand)]
+    Security(cmd_security::SecurityCmd),
+    /// Send an operator command (START, PAUSE, RESUME, ABORT, ESTOP) to the sequencer
+    #[command(name = "command")]
+    Operator(cmd_command::CommandArgs),
 }
 
 fn main() -> anyhow::Result<()> {
@@ -87,5 +95,7 @@ fn main() -> anyhow::Result<()> {
         Command::Node(args) => cmd_launch::run_single(args),
         Command::Replay(args) => cmd_replay::run(args),
         Command::Mcap(cmd) => cmd_mcap::run(cmd),
+        Command::Security(cmd) => cmd_security::run(cmd),
+        Command::Operator(args) => cmd_command::run(args),
     }
 }

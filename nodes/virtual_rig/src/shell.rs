@@ -62,6 +62,15 @@ pub struct VirtualRigNodeConfig {
     /// rig holds zero slip by itself [s]. Lockstep: a missed answer does the same.
     #[serde(default = "default_setpoint_timeout")]
     pub setpoint_timeout_s: f64,
+    /// Lockstep clock: at most this many simulated seconds per wall second (absent: as fast as
+    /// the sequencer answers). Keeps the subscribers outside the loop (recorder, quality) within
+    /// their pace, e.g. on a secured domain.
+    #[serde(default)]
+    pub max_time_scale: Option<f64>,
+    /// Before the first sample, wait until this many subscriptions to `sample` are discovered
+    /// (then `start_delay_s` more), so no subscriber misses the start.
+    #[serde(default)]
+    pub wait_for_subscribers: usize,
 }
 
 fn default_setpoint_timeout() -> f64 {
@@ -97,6 +106,9 @@ impl VirtualRigNodeConfig {
             }
         };
         positive("time_scale", self.time_scale)?;
+        if let Some(m) = self.max_time_scale {
+            positive("max_time_scale", m)?;
+        }
         positive("lockstep_timeout_s", self.lockstep_timeout_s)?;
         positive("setpoint_timeout_s", self.setpoint_timeout_s)?;
         if !(self.start_delay_s.is_finite() && self.start_delay_s >= 0.0) {
@@ -208,6 +220,18 @@ pub async fn run(mut node: RosNode, cfg: VirtualRigNodeConfig, shutdown: Shutdow
             tracing::warn!("setpoint refused, rig safe: {refusal}");
         }
     };
+    let mut waited = tokio::time::Instant::now();
+    while node.discovered_subscriptions(SuiteTopic::RigSample) < cfg.wait_for_subscribers {
+        if waited.elapsed() >= Duration::from_secs(5) {
+            let found = node.discovered_subscriptions(SuiteTopic::RigSample);
+            tracing::info!("waiting for {} subscribers of sample, {found} so far", cfg.wait_for_subscribers);
+            waited = tokio::time::Instant::now();
+        }
+        tokio::select! {
+            _ = shutdown.wait() => return Ok(()),
+            _ = tokio::time::sleep(Duration::from_millis(50)) => {}
+        }
+    }
     tokio::select! {
         _ = shutdown.wait() => return Ok(()),
         _ = tokio::time::sleep(Duration::from_secs_f64(cfg.start_delay_s.max(0.0))) => {}
@@ -225,8 +249,12 @@ pub async fn run(mut node: RosNode, cfg: VirtualRigNodeConfig, shutdown: Shutdow
                 break s;
             }
         };
-        if cfg.clock == ClockMode::Realtime {
-            let due = wall_start + Duration::from_secs_f64((sample.runtime_s - sim_start) / cfg.time_scale);
+        let pace = match cfg.clock {
+            ClockMode::Realtime => Some(cfg.time_scale),
+            ClockMode::Lockstep => cfg.max_time_scale,
+        };
+        if let Some(scale) = pace {
+            let due = wall_start + Duration::from_secs_f64((sample.runtime_s - sim_start) / scale);
             tokio::select! {
                 _ = shutdown.wait() => break,
                 _ = tokio::time::sleep_until(due) => {}

@@ -1,0 +1,121 @@
+//! Roles: what each kind of participant may publish and subscribe to.
+//!
+//! A role is the access-control half of an enclave: `create-enclave` writes the role's topics into
+//! the enclave's permissions document, and every secured peer refuses what the document does not
+//! grant. The suite's rules (issue 14): only the sequencer publishes setpoints, only operator
+//! enclaves publish commands, the recorder and the monitor only subscribe.
+
+use node_runtime::SuiteTopic;
+
+/// What a participant is for. Node kinds map to the role of the same name (the virtual rig, or
+/// a real rig's driver, to [`Role::Rig`]).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub enum Role {
+    /// The rig (virtual or real): publishes samples and `/clock`, takes setpoints.
+    Rig,
+    /// The thermal gate.
+    Thermal,
+    /// The procedure sequencer: the only publisher of setpoints.
+    Sequencer,
+    /// Live channels and the quality monitor (the `quality` node).
+    Quality,
+    /// The recorder: subscribes to every topic, publishes nothing.
+    Recorder,
+    /// An operator station: publishes procedure commands, reads everything.
+    Operator,
+    /// A read-only station or third-party tool (dashboards, plotting, bridges): reads everything.
+    Monitor,
+}
+
+use SuiteTopic as T;
+
+impl Role {
+    pub const ALL: [Role; 7] =
+        [Role::Rig, Role::Thermal, Role::Sequencer, Role::Quality, Role::Recorder, Role::Operator, Role::Monitor];
+
+    pub fn name(self) -> &'static str {
+        match self {
+            Role::Rig => "rig",
+            Role::Thermal => "thermal",
+            Role::Sequencer => "sequencer",
+            Role::Quality => "quality",
+            Role::Recorder => "recorder",
+            Role::Operator => "operator",
+            Role::Monitor => "monitor",
+        }
+    }
+
+    pub fn parse(s: &str) -> Option<Role> {
+        Role::ALL.into_iter().find(|r| r.name() == s)
+    }
+
+    /// The role a suite node kind (`kind` in a launch file) runs with; `None` for kinds that have
+    /// no place on a secured domain (the test pattern publishes every topic, commands included).
+    pub fn of_node_kind(kind: &str) -> Option<Role> {
+        match kind {
+            "virtual_rig" => Some(Role::Rig),
+            "thermal" => Some(Role::Thermal),
+            "sequencer" => Some(Role::Sequencer),
+            "quality" => Some(Role::Quality),
+            "recorder" => Some(Role::Recorder),
+            _ => None,
+        }
+    }
+
+    /// Suite topics the role may publish.
+    pub fn publishes(self) -> &'static [SuiteTopic] {
+        match self {
+            Role::Rig => &[T::RigSample, T::Clock, T::Diagnostics],
+            Role::Thermal => &[T::ThermalState, T::Diagnostics],
+            Role::Sequencer => &[T::RigSetpoint, T::ProcedureState, T::Diagnostics],
+            Role::Quality => &[T::LiveChannels, T::SweepSummary, T::Derived, T::QualityReport, T::Diagnostics],
+            Role::Recorder | Role::Monitor => &[],
+            Role::Operator => &[T::ProcedureCommand],
+        }
+    }
+
+    /// Suite topics the role may subscribe to.
+    pub fn subscribes(self) -> &'static [SuiteTopic] {
+        match self {
+            Role::Rig => &[T::RigSetpoint],
+            Role::Thermal => &[T::RigSample, T::ProcedureState],
+            Role::Sequencer => &[T::RigSample, T::ThermalState, T::ProcedureCommand],
+            Role::Quality => &[T::RigSample, T::ProcedureState],
+            Role::Recorder | Role::Operator | Role::Monitor => &SuiteTopic::ALL,
+        }
+    }
+}
+
+impl std::fmt::Display for Role {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(self.name())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_suite_rules_hold() {
+        let publishers =
+            |t: SuiteTopic| Role::ALL.into_iter().filter(|r| r.publishes().contains(&t)).collect::<Vec<_>>();
+        assert_eq!(publishers(T::RigSetpoint), [Role::Sequencer], "only the sequencer publishes setpoints");
+        assert_eq!(publishers(T::ProcedureCommand), [Role::Operator], "only operators publish commands");
+        assert_eq!(publishers(T::RigSample), [Role::Rig]);
+        assert!(Role::Recorder.publishes().is_empty() && Role::Monitor.publishes().is_empty());
+        assert_eq!(Role::Recorder.subscribes(), &SuiteTopic::ALL);
+    }
+
+    #[test]
+    fn every_published_topic_has_a_reader_role_and_names_parse() {
+        for t in SuiteTopic::ALL {
+            assert!(Role::ALL.iter().any(|r| r.subscribes().contains(&t)), "{t:?}");
+        }
+        for r in Role::ALL {
+            assert_eq!(Role::parse(r.name()), Some(r));
+        }
+        assert_eq!(Role::of_node_kind("virtual_rig"), Some(Role::Rig));
+        assert_eq!(Role::of_node_kind("test_pattern"), None);
+    }
+}
