@@ -274,8 +274,10 @@ pub fn write_log(path: &Path, data: &Dataset) -> Result<(), FitError> {
             ..ProcedureState::default()
         };
         log.write(ch_state, ns(t), ns(t), &tyre_msgs::cdr::to_cdr_with_header(&st).map_err(enc)?).map_err(werr)?;
-        let t_seg = t + 1e-3;
+        // The run's own clock where it runs forward (an imported file's elapsed time), so the
+        // time between sweeps (cooling, wear) survives; otherwise just after the last record.
         let s0 = seg.samples.first().map(|s| s.time_s).unwrap_or(0.0);
+        let t_seg = if s0.is_finite() && s0 > t + 1e-3 { s0 } else { t + 1e-3 };
         for s in &seg.samples {
             let ts = t_seg + (s.time_s - s0);
             let rs = rig_sample_of(s, ts, seq, seg.procedure);

@@ -12,7 +12,8 @@ use std::time::Instant;
 /// Arguments of `tyrerig doctor`.
 #[derive(Debug, Args)]
 pub struct DoctorArgs {
-    /// MCAP logs of the test, in test order (each log is one tyre's run)
+    /// MCAP logs of the test, or measured files (TTC `.dat`/`.mat`, TYDEX `.tdx` or a folder of
+    /// them), in test order (each is one tyre's run)
     #[arg(required = true)]
     logs: Vec<PathBuf>,
     /// Base MF-Tyre 6.1 model to diagnose
@@ -21,6 +22,9 @@ pub struct DoctorArgs {
     /// Fit the base model to the logs first (mffit's staged GS2MF fit), then diagnose it
     #[arg(long)]
     fit: bool,
+    /// With --fit: a fit stage not to run (its channels are then not diagnosed); repeatable
+    #[arg(long = "skip-stage", value_name = "STAGE", requires = "fit")]
+    skip_stages: Vec<String>,
     /// Output directory (doctor.json, report.md, plots, <model>_doctor.tir)
     #[arg(long)]
     out: PathBuf,
@@ -46,8 +50,15 @@ pub struct DoctorArgs {
 /// Runs `tyrerig doctor`.
 pub fn run(args: DoctorArgs) -> Result<()> {
     let t0 = Instant::now();
-    let mut logs = Vec::new();
+    std::fs::create_dir_all(&args.out).with_context(|| format!("{}: cannot create", args.out.display()))?;
+    // Measured files are imported into MCAP logs in the output directory first: the doctor and
+    // the base fit then read every source the same way (samples and sweep states).
+    let mut log_paths = Vec::new();
     for p in &args.logs {
+        log_paths.push(import_if_measured(p, &args.out)?);
+    }
+    let mut logs = Vec::new();
+    for p in &log_paths {
         logs.push(RawLog::read_mcap(p)?);
     }
     let ds = Dataset::from_logs(&logs, &DataOptions { point_rate_hz: args.rate_hz, ..DataOptions::default() })?;
@@ -60,12 +71,17 @@ pub fn run(args: DoctorArgs) -> Result<()> {
             m.display().to_string(),
         ),
         (None, true) => {
-            let paths: Vec<&std::path::Path> = args.logs.iter().map(PathBuf::as_path).collect();
+            let paths: Vec<&std::path::Path> = log_paths.iter().map(PathBuf::as_path).collect();
             let data = mffit::logs::read_logs(&paths).context("reading the logs for the base fit")?;
             eprintln!("fitting the base model to {} log(s) …", paths.len());
-            let fit = mffit::stages::fit(&data, &mffit::stages::FitOptions::default()).context("base model fit")?;
+            // The base only has to be the best model the data give: no cross-validation here.
+            let opts = mffit::stages::FitOptions {
+                folds: 0,
+                skip_stages: args.skip_stages.clone(),
+                ..mffit::stages::FitOptions::default()
+            };
+            let fit = mffit::stages::fit(&data, &opts).context("base model fit")?;
             not_diagnosed = unfitted_channels(&fit);
-            std::fs::create_dir_all(&args.out).with_context(|| format!("{}: cannot create", args.out.display()))?;
             let path = args.out.join("base_fit.tir");
             std::fs::write(&path, fit.params.to_tir_string()).with_context(|| format!("{}", path.display()))?;
             (fit.params, path.display().to_string())
@@ -147,4 +163,28 @@ fn unfitted_channels(fit: &mffit::FitResult) -> Vec<(usize, String)> {
     .into_iter()
     .filter_map(|(ch, r)| r.map(|r| (ch, r)))
     .collect()
+}
+
+/// The MCAP log to read for `path`: itself, or for a measured file (TTC `.dat`/`.mat`, TYDEX, a
+/// folder) the log it is imported into, `<out>/<name>.imported.mcap`.
+fn import_if_measured(path: &std::path::Path, out: &std::path::Path) -> Result<PathBuf> {
+    let measured = path.is_dir() || rigdata::import::FileFormat::of(path).is_some();
+    if !measured {
+        return Ok(path.to_path_buf());
+    }
+    let import = rigdata::read_path(path, &rigdata::ReadOptions::default())
+        .with_context(|| format!("reading {}", path.display()))?;
+    for f in &import.inspection.files {
+        eprintln!(
+            "{}: {} sweeps, {} rows excluded, {} warnings (`tyrerig inspect` lists them)",
+            f.file,
+            f.sweeps.len(),
+            f.excluded.iter().map(|e| e.1).sum::<usize>(),
+            f.warnings.len()
+        );
+    }
+    let name = path.file_name().map_or_else(|| "measured".to_owned(), |n| n.to_string_lossy().into_owned());
+    let log = out.join(format!("{name}.imported.mcap"));
+    mffit::logs::write_log(&log, &import.dataset).with_context(|| format!("writing {}", log.display()))?;
+    Ok(log)
 }
