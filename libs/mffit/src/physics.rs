@@ -150,7 +150,15 @@ fn margins_of(params: &TyreParams, set: MarginSet, grid: &Grid, described: bool)
     match set {
         MarginSet::FyPure | MarginSet::FxPure => {
             let lateral = set == MarginSet::FyPure;
-            let kp = if lateral { g("PKY1").signum() } else { 1.0 };
+            // The nominal sign of the cornering stiffness is the model's own at Fz0, IA 0, P0
+            // (PKY1's sign alone does not say it: a negative PKY4 flips it, as in MFeval's
+            // example file); a longitudinal slip stiffness is positive in ISO-W.
+            let kp = if lateral {
+                let k0 = slip_stiffness(params, grid, fz0, 0.0, p0, true);
+                if k0 < 0.0 { -1.0 } else { 1.0 }
+            } else {
+                1.0
+            };
             for (fz, gam, p) in grid.conditions() {
                 let df = (fz - fz0) / fz0;
                 let dp = (p - p0) / p0;
