@@ -1,0 +1,90 @@
+//! `tyrerig fit` on measured-style files of a tyre the Magic Formula cannot represent exactly:
+//! the committed TTC-style runs of the virtual brush race tyre (`tests/fixtures/ttc/`, a
+//! cornering run at four pressures and a drive/brake/combined run at three cambers), with the
+//! repeat run on the second specimen as `--validate`. The command must exit 0 (every stage
+//! physical), cross-validate every fitted stage over sweeps, and reach the accuracy on
+//! the held-out sweeps: FY/FX pure ≤ 3 %, FX/FY combined ≤ 5 %, MZ ≤ 8 % of peak.
+
+use std::path::PathBuf;
+use std::process::Command;
+
+fn root() -> PathBuf {
+    PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../..")
+}
+
+fn fixture(name: &str) -> String {
+    root().join("tests/fixtures/ttc").join(name).display().to_string()
+}
+
+#[test]
+fn race_brush_tyre_ttc_runs_fit_physical_and_within_the_limits() {
+    let dir = PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join("brush_fit_race");
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).expect("scratch dir");
+    let tir = dir.join("race.tir");
+    let report = dir.join("report");
+    let out = Command::new(env!("CARGO_BIN_EXE_tyrerig"))
+        .args(["fit", &fixture("race_cornering.dat"), &fixture("race_drive_brake.dat")])
+        .args(["--validate", &fixture("race_drive_brake_tyre2.dat"), "--folds", "3"])
+        .arg("--out")
+        .arg(&tir)
+        .arg("--report")
+        .arg(&report)
+        .output()
+        .expect("run tyrerig fit");
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(out.status.success(), "tyrerig fit exited {:?} (3 = non-physical):\n{stderr}", out.status.code());
+    assert!(tir.exists(), "no .tir written");
+    let json: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(report.join("fit.json")).expect("fit.json")).expect("json");
+    assert!(json["nonphysical_stages"].as_array().is_some_and(Vec::is_empty), "{}", json["nonphysical_stages"]);
+
+    let stage = |name: &str| {
+        json["stages"]
+            .as_array()
+            .and_then(|a| a.iter().find(|s| s["stage"] == name))
+            .unwrap_or_else(|| panic!("stage {name} missing from fit.json:\n{stderr}"))
+    };
+    // Held-out (k-fold over sweeps) NRMSE in % of peak, per stage, against its limit.
+    let limits = [
+        ("fy_pure", 3.0),
+        ("fx_pure", 3.0),
+        ("fx_combined", 5.0),
+        ("fy_combined", 5.0),
+        ("mz_pure", 8.0),
+        ("mz_combined", 8.0),
+    ];
+    for (name, limit) in limits {
+        let s = stage(name);
+        let heldout = s["heldout_nrmse_pct"].as_f64().unwrap_or_else(|| panic!("{name}: no held-out NRMSE: {s}"));
+        let fit = s["nrmse_pct"].as_f64().expect("nrmse");
+        assert!(heldout <= limit, "{name}: held-out NRMSE {heldout:.2} % > {limit} % (fit {fit:.2} %)");
+        // Every fitted coefficient carries an uncertainty.
+        let coefs = s["coefficients"].as_array().expect("coefficients");
+        assert!(!coefs.is_empty(), "{name}: no coefficients fitted");
+        assert!(
+            coefs.iter().all(|c| c["std"].as_f64().is_some_and(|v| v.is_finite() && v >= 0.0)),
+            "{name}: {coefs:?}"
+        );
+    }
+    // Camber 0 only in cornering, three cambers in drive/brake: the pure-lateral points of the
+    // slip-ratio sweeps carry camber, so FY's camber stiffness is fitted, not held.
+    let fy = stage("fy_pure");
+    let held: Vec<&str> = fy["held"].as_array().expect("held").iter().filter_map(|h| h["key"].as_str()).collect();
+    assert!(!held.contains(&"PKY6"), "PKY6 held: {held:?}");
+    // One pressure in drive/brake: FX's pressure terms are held, with the reason.
+    let fx = stage("fx_pure");
+    let fx_held = fx["held"].as_array().expect("held");
+    let ppx = fx_held.iter().find(|h| h["key"] == "PPX1").unwrap_or_else(|| panic!("PPX1 not held: {fx_held:?}"));
+    assert!(ppx["reason"].as_str().is_some_and(|r| r.contains("pressure")), "{ppx}");
+
+    // The repeat run on the second specimen scores the model too.
+    let validation = json["validation"].as_array().expect("validation");
+    assert_eq!(validation.len(), 1, "{validation:?}");
+    let rows = validation[0][1].as_array().expect("rows");
+    for name in ["fx_pure", "fx_combined", "fy_combined"] {
+        let row = rows.iter().find(|r| r["stage"] == name).unwrap_or_else(|| panic!("{name} not validated: {rows:?}"));
+        let v = row["nrmse_pct"].as_f64().expect("nrmse");
+        assert!(v.is_finite() && v < 10.0, "{name} on the repeat run: {v:.2} %");
+    }
+}
