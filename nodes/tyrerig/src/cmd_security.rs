@@ -63,11 +63,11 @@ pub fn run(cmd: SecurityCmd) -> anyhow::Result<()> {
                 let name = EnclaveName::parse(&name)?;
                 let base = name.base_name();
                 let role = given.or_else(|| Role::default_for(base)).ok_or_else(|| {
-                        anyhow::anyhow!(
-                            "enclave {name}: {base:?} is neither a role nor a node kind; say what it may do with \
+                    anyhow::anyhow!(
+                        "enclave {name}: {base:?} is neither a role nor a node kind; say what it may do with \
                          --role (one of {roles})"
-                        )
-                    })?;
+                    )
+                })?;
                 let t = Instant::now();
                 let report = ks.create_enclave(&name, role, now_s)?;
                 println!(
