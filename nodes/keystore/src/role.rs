@@ -3,7 +3,8 @@
 //! A role is the access-control half of an enclave: `create-enclave` writes the role's topics into
 //! the enclave's permissions document, and every secured peer refuses what the document does not
 //! grant. The suite's rules (issue 14): only the sequencer publishes setpoints, only operator
-//! enclaves publish commands, the recorder and the monitor only subscribe.
+//! enclaves publish commands, the recorder and the monitor only subscribe (the recorder's one
+//! publication is its loss and silent-stream alarms on `/diagnostics`).
 
 use node_runtime::SuiteTopic;
 
@@ -19,7 +20,7 @@ pub enum Role {
     Sequencer,
     /// Live channels and the quality monitor (the `quality` node).
     Quality,
-    /// The recorder: subscribes to every topic, publishes nothing.
+    /// The recorder: subscribes to every topic, publishes only its alarms on `/diagnostics`.
     Recorder,
     /// An operator station: publishes procedure commands, reads everything.
     Operator,
@@ -58,7 +59,20 @@ impl Role {
             "sequencer" => Some(Role::Sequencer),
             "quality" => Some(Role::Quality),
             "recorder" => Some(Role::Recorder),
+            // The Foxglove screen reads every topic; one whose launch file lets clients send
+            // commands (`allow_commands`) needs an operator enclave, given with `--role`.
+            "foxglove" => Some(Role::Monitor),
             _ => None,
+        }
+    }
+
+    /// The role an enclave named `…/<base_name>` gets when none is given: a role's name, a node
+    /// kind's role, or that of a participant `tyrerig` itself opens (`run_watcher`, the watcher
+    /// of `tyrerig run`, only reads).
+    pub fn default_for(base_name: &str) -> Option<Role> {
+        match base_name {
+            "run_watcher" => Some(Role::Monitor),
+            _ => Role::parse(base_name).or_else(|| Role::of_node_kind(base_name)),
         }
     }
 
@@ -69,7 +83,10 @@ impl Role {
             Role::Thermal => &[T::ThermalState, T::Diagnostics],
             Role::Sequencer => &[T::RigSetpoint, T::ProcedureState, T::Diagnostics],
             Role::Quality => &[T::LiveChannels, T::SweepSummary, T::Derived, T::QualityReport, T::Diagnostics],
-            Role::Recorder | Role::Monitor => &[],
+            // The recorder's only output besides its log: its loss and silent-stream alarms
+            // (loss is never silent, docs/reliability.md).
+            Role::Recorder => &[T::Diagnostics],
+            Role::Monitor => &[],
             Role::Operator => &[T::ProcedureCommand],
         }
     }
@@ -103,8 +120,19 @@ mod tests {
         assert_eq!(publishers(T::RigSetpoint), [Role::Sequencer], "only the sequencer publishes setpoints");
         assert_eq!(publishers(T::ProcedureCommand), [Role::Operator], "only operators publish commands");
         assert_eq!(publishers(T::RigSample), [Role::Rig]);
-        assert!(Role::Recorder.publishes().is_empty() && Role::Monitor.publishes().is_empty());
+        assert_eq!(Role::Recorder.publishes(), [T::Diagnostics], "the recorder only reports on /diagnostics");
+        assert!(Role::Monitor.publishes().is_empty());
         assert_eq!(Role::Recorder.subscribes(), &SuiteTopic::ALL);
+    }
+
+    #[test]
+    fn every_suite_node_may_announce_on_diagnostics() {
+        // Every node shell opens a /diagnostics writer at start (loss and alarms,
+        // docs/reliability.md): a role without it keeps its node from starting when secured.
+        for kind in ["virtual_rig", "thermal", "sequencer", "quality", "recorder"] {
+            let role = Role::of_node_kind(kind).expect("a suite node kind");
+            assert!(role.publishes().contains(&T::Diagnostics), "{kind} ({role})");
+        }
     }
 
     #[test]
@@ -117,5 +145,10 @@ mod tests {
         }
         assert_eq!(Role::of_node_kind("virtual_rig"), Some(Role::Rig));
         assert_eq!(Role::of_node_kind("test_pattern"), None);
+        assert_eq!(Role::of_node_kind("foxglove"), Some(Role::Monitor), "a screen only reads unless told");
+        assert_eq!(Role::default_for("operator"), Some(Role::Operator));
+        assert_eq!(Role::default_for("virtual_rig"), Some(Role::Rig));
+        assert_eq!(Role::default_for("run_watcher"), Some(Role::Monitor));
+        assert_eq!(Role::default_for("operator_1"), None, "stations say what they may do");
     }
 }

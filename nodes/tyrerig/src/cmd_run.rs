@@ -65,7 +65,8 @@ pub struct RunArgs {
     #[arg(long, conflicts_with = "headless")]
     pub max_speed: Option<f64>,
     /// DDS Security (not with --headless): the SROS2 keystore holding the enclaves /rig/recorder,
-    /// /rig/thermal, /rig/sequencer, /rig/quality, /rig/virtual_rig and /rig/run_watcher.
+    /// /rig/thermal, /rig/sequencer, /rig/quality, /rig/virtual_rig and /rig/run_watcher (and
+    /// /rig/foxglove with --foxglove: a monitor, an operator with --foxglove-allow).
     #[arg(long, conflicts_with = "headless")]
     pub keystore: Option<PathBuf>,
 }
@@ -291,7 +292,13 @@ fn run_dds(args: &RunArgs) -> anyhow::Result<()> {
     if let Some(sec) = &runtime.security {
         // Every participant's enclave must be there before any node starts.
         for name in nodes.iter().map(|n| n.name.as_str()).chain(["run_watcher"]) {
-            sec.enclave_dir(name, &runtime.namespace)?;
+            sec.enclave_dir(name, &runtime.namespace).map_err(|e| match name {
+                // Its default role (monitor) may not send the commands --foxglove-allow lets through.
+                "foxglove" if !args.foxglove_allow.is_empty() => {
+                    anyhow::anyhow!("{e}; --foxglove-allow sends commands, so give it `--role operator`")
+                }
+                _ => e.into(),
+            })?;
         }
     }
     let wall = std::time::Instant::now();

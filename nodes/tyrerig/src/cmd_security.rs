@@ -17,7 +17,8 @@ pub enum SecurityCmd {
         #[arg(required = true)]
         names: Vec<String>,
         /// rig | thermal | sequencer | quality | recorder | operator | monitor. Default: the
-        /// name's last segment when it is a role or a node kind (/rig/virtual_rig → rig).
+        /// name's last segment when it is a role or a node kind (/rig/virtual_rig → rig,
+        /// /rig/foxglove → monitor; /rig/run_watcher → monitor).
         #[arg(long)]
         role: Option<String>,
     },
@@ -61,13 +62,12 @@ pub fn run(cmd: SecurityCmd) -> anyhow::Result<()> {
             for name in names {
                 let name = EnclaveName::parse(&name)?;
                 let base = name.base_name();
-                let role =
-                    given.or_else(|| Role::parse(base)).or_else(|| Role::of_node_kind(base)).ok_or_else(|| {
-                        anyhow::anyhow!(
-                            "enclave {name}: {base:?} is neither a role nor a node kind; say what it may do with \
+                let role = given.or_else(|| Role::default_for(base)).ok_or_else(|| {
+                    anyhow::anyhow!(
+                        "enclave {name}: {base:?} is neither a role nor a node kind; say what it may do with \
                          --role (one of {roles})"
-                        )
-                    })?;
+                    )
+                })?;
                 let t = Instant::now();
                 let report = ks.create_enclave(&name, role, now_s)?;
                 println!(
