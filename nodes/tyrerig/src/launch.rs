@@ -268,11 +268,7 @@ mod tests {
         let plain = LaunchFile::load(&launch_config().join("suite.toml")).expect("suite.toml");
         let secure = LaunchFile::load(&launch_config().join("suite-secure.toml")).expect("suite-secure.toml");
         let names = |f: &LaunchFile| f.nodes.iter().map(|n| (n.name.clone(), n.kind.clone())).collect::<Vec<_>>();
-        // The same nodes, but the Foxglove node: its WebSocket clients are not authenticated,
-        // so serving a secured domain to them would bypass the access control.
-        let mut plain_names = names(&plain);
-        plain_names.retain(|(_, kind)| kind != "foxglove");
-        assert_eq!(plain_names, names(&secure));
+        assert_eq!(names(&plain), names(&secure));
         let sec = secure.runtime.security.expect("[security]");
         assert!(sec.keystore.is_absolute() || sec.keystore.starts_with(launch_config()), "{:?}", sec.keystore);
         assert!(sec.keystore.ends_with("out/keystore"), "{:?}", sec.keystore);
