@@ -320,8 +320,10 @@ def test_thermal_node_gone_releases_no_sweep(short_suite):
     fills ~8 s after the kill, and from then on the rig's samples are refused for every reader
     until the lease ends (docs/reliability.md, "Known limits"). The sequencer then holds the
     rig (rig_silent), the pause stays unreleased, and the procedure goes on once samples and a
-    fresh thermal state come back. Whichever path a run takes, every sample lost must be in the
-    recorder's loss record."""
+    fresh thermal state come back. The new node's reader can also make the rig refuse a few
+    samples as it matches (RustDDS counts it as having acknowledged nothing until its first
+    ACKNACK). Whichever path a run takes, every sample lost must be in the recorder's loss
+    record."""
     suite = short_suite
     # A normal pause first, to know how long one takes on this machine.
     t_a, first = suite.room.wait_state(lambda s: s.phase == PHASE_THERMAL_PAUSE, 0.0, 90.0, "a thermal pause")
