@@ -111,6 +111,7 @@ pub fn to_json(
             "final_heldout": per_ch(dx.rms.final_heldout),
         },
         "thermal_reference_temp_c": dx.t_ref_c,
+        "laser_flash_decay_s": dx.flash_decay_s,
         "stop_reason": dx.stop_reason,
         "not_diagnosed": dx.not_diagnosed,
         "extended_model": model_file,
@@ -228,6 +229,18 @@ pub fn markdown(
         m,
         "\nNoise σ: point-to-point scatter of the base residual along each sweep (robust second difference).\n"
     );
+    let _ = match dx.flash_decay_s {
+        Some(tau) => writeln!(
+            m,
+            "Grip temperature: quiet tread-laser readings with the flash's decay (τ = {tau:.2} s, fitted) removed; reference {:.1} °C.\n",
+            dx.t_ref_c
+        ),
+        None => writeln!(
+            m,
+            "Grip temperature: quiet tread-laser readings (no flash decay evident); reference {:.1} °C.\n",
+            dx.t_ref_c
+        ),
+    };
     let _ = writeln!(m, "## 2. Find: where the base model disagrees beyond noise\n");
     let flagged: Vec<_> = dx.regions.iter().filter(|b| b.flagged).collect();
     if flagged.is_empty() {
