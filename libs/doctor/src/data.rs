@@ -179,9 +179,10 @@ pub struct Dataset {
     pub sweeps: Vec<SweepInfo>,
     /// Sources, for the report.
     pub sources: Vec<String>,
-    /// Time constant of the laser flash's decay after sliding, fitted from the quiet stretches
-    /// [s]; `None` when no decay shows (the quiet laser readings are used as they are).
-    pub flash_decay_s: Option<f64>,
+    /// Per log (tyre), the time constant of the laser flash's decay after sliding, fitted from
+    /// its quiet stretches [s]; `None` when no decay shows (its quiet laser readings are used as
+    /// they are).
+    pub flash_decay_s: Vec<Option<f64>>,
 }
 
 fn finite_or_nan(v: f64) -> f64 {
@@ -376,7 +377,7 @@ impl Dataset {
         // over seconds) and a test plan leaves only short pauses between sweeps: the lasers then
         // read tens of kelvin of flash at every "quiet" moment. Its decay is fitted out.
         let (anchors, flash_decay_s) =
-            flash::deflashed(&s.t_s, &s.temp_laser_c, &power_lp, opt.quiet_power_w, &s.new_tyre);
+            flash::deflashed(&s.t_s, &s.temp_laser_c, &s.sliding_power_w, &power_lp, opt.quiet_power_w, &s.new_tyre);
         let mut tg = vec![f64::NAN; n];
         if !anchors.is_empty() {
             let mut q = 0usize;

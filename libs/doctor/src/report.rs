@@ -229,18 +229,14 @@ pub fn markdown(
         m,
         "\nNoise σ: point-to-point scatter of the base residual along each sweep (robust second difference).\n"
     );
-    let _ = match dx.flash_decay_s {
-        Some(tau) => writeln!(
-            m,
-            "Grip temperature: quiet tread-laser readings with the flash's decay (τ = {tau:.2} s, fitted) removed; reference {:.1} °C.\n",
-            dx.t_ref_c
-        ),
-        None => writeln!(
-            m,
-            "Grip temperature: quiet tread-laser readings (no flash decay evident); reference {:.1} °C.\n",
-            dx.t_ref_c
-        ),
-    };
+    let taus: Vec<String> =
+        dx.flash_decay_s.iter().map(|t| t.map_or("none evident".to_owned(), |t| format!("τ = {t:.2} s"))).collect();
+    let _ = writeln!(
+        m,
+        "Grip temperature: quiet tread-laser readings with the flash's decay fitted out (per log: {}); reference {:.1} °C.\n",
+        taus.join(", "),
+        dx.t_ref_c
+    );
     let _ = writeln!(m, "## 2. Find: where the base model disagrees beyond noise\n");
     let flagged: Vec<_> = dx.regions.iter().filter(|b| b.flagged).collect();
     if flagged.is_empty() {
