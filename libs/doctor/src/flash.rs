@@ -187,7 +187,10 @@ mod tests {
         (t, temp, power, surface)
     }
 
-    fn run(flash: bool) -> (Vec<(usize, f64)>, Vec<Option<f64>>, Vec<f64>, Vec<f64>) {
+    /// Anchors, per-log τ, the readings and the true surface.
+    type Run = (Vec<(usize, f64)>, Vec<Option<f64>>, Vec<f64>, Vec<f64>);
+
+    fn run(flash: bool) -> Run {
         let (t, temp, power, surface) = readings(flash);
         // Quiet: no sliding for 0.5 s (the peak-following low-pass, simplified).
         let lp: Vec<f64> =
