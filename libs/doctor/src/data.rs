@@ -3,6 +3,7 @@
 //! rates), and the decimated points residuals are computed at.
 
 use crate::DoctorError;
+use crate::flash;
 use std::path::Path;
 use tyre_msgs::{ProcedureState, RigSample};
 
@@ -178,6 +179,10 @@ pub struct Dataset {
     pub sweeps: Vec<SweepInfo>,
     /// Sources, for the report.
     pub sources: Vec<String>,
+    /// Per log (tyre), the time constant of the laser flash's decay after sliding, fitted from
+    /// its quiet stretches [s]; `None` when no decay shows (its quiet laser readings are used as
+    /// they are).
+    pub flash_decay_s: Vec<Option<f64>>,
 }
 
 fn finite_or_nan(v: f64) -> f64 {
@@ -360,29 +365,33 @@ impl Dataset {
         // so "quiet" means the sliding power low-passed over `quiet_memory_s` is low — a fast
         // sweep's zero crossing is not quiet.
         let mut p_lp = 0.0;
-        let quiet: Vec<usize> = (0..n)
-            .filter(|&i| {
+        let power_lp: Vec<f64> = (0..n)
+            .map(|i| {
                 let dt = if i > 0 { (s.t_s[i] - s.t_s[i - 1]).clamp(0.0, 1.0) } else { 0.0 };
-                let p = s.sliding_power_w[i];
                 // Peak-following low-pass: rises at once, decays with the flash memory.
-                p_lp = p.max(p_lp * (-dt / opt.quiet_memory_s).exp());
-                s.temp_laser_c[i].is_finite() && p_lp < opt.quiet_power_w
+                p_lp = s.sliding_power_w[i].max(p_lp * (-dt / opt.quiet_memory_s).exp());
+                p_lp
             })
             .collect();
+        // The flash outlives the quiet memory when sliding was longitudinal (its patch cools
+        // over seconds) and a test plan leaves only short pauses between sweeps: the lasers then
+        // read tens of kelvin of flash at every "quiet" moment. Its decay is fitted out.
+        let (anchors, flash_decay_s) =
+            flash::deflashed(&s.t_s, &s.temp_laser_c, &s.sliding_power_w, &power_lp, opt.quiet_power_w, &s.new_tyre);
         let mut tg = vec![f64::NAN; n];
-        if !quiet.is_empty() {
+        if !anchors.is_empty() {
             let mut q = 0usize;
             for (i, out) in tg.iter_mut().enumerate() {
-                while q + 1 < quiet.len() && quiet[q + 1] <= i {
+                while q + 1 < anchors.len() && anchors[q + 1].0 <= i {
                     q += 1;
                 }
-                let a = quiet[q];
-                *out = if i <= a || q + 1 >= quiet.len() {
-                    s.temp_laser_c[a]
+                let (a, ta) = anchors[q];
+                *out = if i <= a || q + 1 >= anchors.len() {
+                    ta
                 } else {
-                    let b = quiet[q + 1];
+                    let (b, tb) = anchors[q + 1];
                     let w = (s.t_s[i] - s.t_s[a]) / (s.t_s[b] - s.t_s[a]).max(1e-9);
-                    s.temp_laser_c[a] + w * (s.temp_laser_c[b] - s.temp_laser_c[a])
+                    ta + w * (tb - ta)
                 };
             }
             let mut y = tg[0];
@@ -396,6 +405,7 @@ impl Dataset {
         s.temp_grip_c = tg;
         s.alpha_rate_dps = central_rate(&s.t_s, &s.alpha_deg, 0.1);
         s.kappa_rate_ps = central_rate(&s.t_s, &s.kappa, 0.1);
+        self.flash_decay_s = flash_decay_s;
     }
 
     /// Number of points.

@@ -161,6 +161,9 @@ pub struct Diagnosis {
     pub t_ref_c: f64,
     /// Reference speed of the speed extension [m/s].
     pub v_ref_mps: f64,
+    /// Per log, the decay time constant of the laser flash fitted out of the quiet tread
+    /// temperatures [s] (`None`: none evident) — see [`crate::flash`].
+    pub flash_decay_s: Vec<Option<f64>>,
     /// Channels left out of the diagnosis, and why (e.g. `DSTWOWHC not diagnosed: the base's
     /// loaded radius was not fitted from these logs`).
     pub not_diagnosed: Vec<String>,
@@ -451,6 +454,7 @@ pub fn diagnose(ds: &Dataset, base: &TyreParams, cfg: &DoctorConfig) -> Result<D
         stop_reason,
         t_ref_c: ev.t_ref_c,
         v_ref_mps: ev.v_ref_mps,
+        flash_decay_s: ds.flash_decay_s.clone(),
         not_diagnosed,
         plot,
     })

@@ -172,14 +172,42 @@ pub fn fit_effects(
     best.unwrap_or_default()
 }
 
-/// Held-out folds: sweep ordinal modulo `k`.
+/// Held-out folds: the sweeps, in a fixed pseudo-random order, dealt round-robin into `k`
+/// folds (balanced: fold sizes differ by at most one sweep).
+///
+/// Not the sweep ordinal modulo `k`: test plans are periodic (a TTC drive/brake run cycles four
+/// loads per slip-angle/camber cell), and with four folds every fold would then hold exactly one
+/// load — each held-out fold an extrapolation in load, and an effect that varies with load
+/// (heating does) would fail every fold however right it is. The order is a fixed permutation
+/// (a hash of the ordinal), so a diagnosis is deterministic.
 pub fn folds(ev: &Evaluator<'_>, k: usize) -> Vec<Vec<usize>> {
+    let k = k.max(1);
+    let fold_of = sweep_folds(ev.ds.sweeps.len(), k);
     let mut f = vec![Vec::new(); k];
     for p in 0..ev.ds.len() {
-        f[ev.ds.point_sweep(p) % k].push(p);
+        let sw = ev.ds.point_sweep(p);
+        f[fold_of.get(sw).copied().unwrap_or(sw % k)].push(p);
     }
     f.retain(|v| !v.is_empty());
     f
+}
+
+/// Fold of each of `n` sweeps: ordinals sorted by a 64-bit mix of the ordinal (splitmix64's
+/// finaliser), then dealt round-robin into `k` folds.
+fn sweep_folds(n: usize, k: usize) -> Vec<usize> {
+    let mix = |x: u64| {
+        let mut z = x.wrapping_add(0x9e37_79b9_7f4a_7c15);
+        z = (z ^ (z >> 30)).wrapping_mul(0xbf58_476d_1ce4_e5b9);
+        z = (z ^ (z >> 27)).wrapping_mul(0x94d0_49bb_1331_11eb);
+        z ^ (z >> 31)
+    };
+    let mut order: Vec<usize> = (0..n).collect();
+    order.sort_by_key(|&i| mix(i as u64));
+    let mut fold_of = vec![0; n];
+    for (pos, &sw) in order.iter().enumerate() {
+        fold_of[sw] = pos % k;
+    }
+    fold_of
 }
 
 /// Cross-validated predictions: every point predicted by the fit that did not see its sweep.
@@ -201,4 +229,23 @@ pub fn cross_validate(
         }
     }
     out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::sweep_folds;
+
+    #[test]
+    fn folds_are_balanced_and_do_not_alias_a_periodic_plan() {
+        // A TTC drive/brake plan: 9 slip-angle/camber cells × 4 loads, loads cycling.
+        let f = sweep_folds(36, 4);
+        for fold in 0..4 {
+            let sweeps: Vec<usize> = (0..36).filter(|&s| f[s] == fold).collect();
+            assert_eq!(sweeps.len(), 9, "fold {fold}: {sweeps:?}");
+            let loads: std::collections::BTreeSet<usize> = sweeps.iter().map(|s| s % 4).collect();
+            assert!(loads.len() >= 3, "fold {fold} holds loads {loads:?} only");
+        }
+        // Deterministic.
+        assert_eq!(f, sweep_folds(36, 4));
+    }
 }

@@ -10,7 +10,7 @@
 //!    time in the test, sliding energy, grip temperature and slip rate ([`diagnose::RegionBin`]).
 //! 3. **Names** the effect: each candidate of the catalogue ([`effects::Effect`]) has a physical
 //!    variable and a parametric extension; each is fitted on training sweeps and scored on
-//!    held-out sweeps (round-robin folds) by the share of the held-out χ² it explains after a
+//!    held-out sweeps (folds of sweeps in a fixed shuffled order) by the share of the held-out χ² it explains after a
 //!    k·ln N penalty for its parameters. The best is named only when that evidence exceeds a
 //!    threshold and it improves every held-out fold but at most one; then the search repeats
 //!    greedily with the named effects in the model, until nothing significant remains.
@@ -35,6 +35,7 @@ pub mod diagnose;
 pub mod effects;
 pub mod extension;
 pub mod fit;
+pub mod flash;
 pub mod report;
 
 pub use data::{DataOptions, Dataset, RawLog};

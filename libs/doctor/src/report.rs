@@ -111,6 +111,7 @@ pub fn to_json(
             "final_heldout": per_ch(dx.rms.final_heldout),
         },
         "thermal_reference_temp_c": dx.t_ref_c,
+        "laser_flash_decay_s": dx.flash_decay_s,
         "stop_reason": dx.stop_reason,
         "not_diagnosed": dx.not_diagnosed,
         "extended_model": model_file,
@@ -227,6 +228,14 @@ pub fn markdown(
     let _ = writeln!(
         m,
         "\nNoise σ: point-to-point scatter of the base residual along each sweep (robust second difference).\n"
+    );
+    let taus: Vec<String> =
+        dx.flash_decay_s.iter().map(|t| t.map_or("none evident".to_owned(), |t| format!("τ = {t:.2} s"))).collect();
+    let _ = writeln!(
+        m,
+        "Grip temperature: quiet tread-laser readings with the flash's decay fitted out (per log: {}); reference {:.1} °C.\n",
+        taus.join(", "),
+        dx.t_ref_c
     );
     let _ = writeln!(m, "## 2. Find: where the base model disagrees beyond noise\n");
     let flagged: Vec<_> = dx.regions.iter().filter(|b| b.flagged).collect();
