@@ -260,6 +260,12 @@ def last_setpoint_is_zero_slip(suite: Suite, t0: float) -> None:
     assert after[-1].slip_angle_deg == 0.0 and after[-1].slip_ratio == 0.0, after[-1]
 
 
+@pytest.mark.xfail(strict=False, reason=(
+    "RustDDS 0.15.1: a stopped-and-continued process's poll returns EINTR (Linux does so for "
+    "epoll_wait after SIGSTOP/SIGCONT even without a handler) and the participant's event loop "
+    "exits ('dp_event_loop poll failed: Interrupted system call'), so the continued rig sends "
+    "nothing more; the detection and the hold (asserted before SIGCONT) work, the resume cannot "
+    "(docs/reliability.md, Known limits)"))
 def test_rig_stopped_2s_is_held_safe_and_the_sweep_reruns(suite):
     _, st = in_sweep(suite)
     time.sleep(0.3)

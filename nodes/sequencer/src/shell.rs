@@ -286,5 +286,11 @@ pub async fn run(mut node: RosNode, cfg: SequencerNodeConfig, shutdown: Shutdown
         }
         loss.announce(&diag_pub, tyre_msgs::builtin_interfaces::Time::from_secs_f64(now_s));
     }
+    if cfg.exit_when_done {
+        // The final ProcedureState (COMPLETE, ABORTED, ESTOP) was just written: keep the
+        // writers alive long enough for reliable delivery (and a repair) before the participant
+        // goes, or the log may end without the state that says how the procedure ended.
+        tokio::time::sleep(Duration::from_millis(500)).await;
+    }
     Ok(())
 }
