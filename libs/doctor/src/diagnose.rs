@@ -3,7 +3,11 @@
 use crate::DoctorError;
 use crate::data::Dataset;
 use crate::effects::{CH_FY, CH_RL, CHANNELS, Effect, EffectParams, Evaluator, param_specs, untestable_reason};
-use crate::fit::{FitOptions, FitSpec, chi2, count_valid, cross_validate, fit_effects, folds, measured, noise_floor};
+use crate::fit::{
+    FitOptions, FitSpec, chi2, count_valid, cross_validate, cross_validate_corrected, fit_effects, folds, measured,
+    noise_floor,
+};
+use crate::form::{self, Bandwidths};
 use mftyre::TyreParams;
 use serde::Serialize;
 
@@ -35,6 +39,10 @@ pub struct DoctorConfig {
     /// a channel the base model was neither fitted for nor given for would show the base's own
     /// gap, and the doctor would "explain" it with some effect.
     pub not_diagnosed: Vec<(usize, String)>,
+    /// Score state effects (thermal, wear, break-in, transient, speed) against the present model
+    /// plus the cross-fitted form error ([`crate::form`]): on for a base fitted to the same
+    /// logs, whose remaining misfit is mostly the MF form's own.
+    pub form_correction: bool,
 }
 
 impl Default for DoctorConfig {
@@ -50,6 +58,7 @@ impl Default for DoctorConfig {
             threads: std::thread::available_parallelism().map_or(1, |n| n.get()).min(4),
             min_region_cut: 0.1,
             not_diagnosed: Vec::new(),
+            form_correction: false,
         }
     }
 }
@@ -79,6 +88,9 @@ pub struct CandidateScore {
     pub delta_chi2_by_channel: [f64; 4],
     /// Significant (would be named if best).
     pub significant: bool,
+    /// Scored against the present model plus the form error common to all sweeps at the
+    /// operating point ([`crate::form`]).
+    pub form_corrected: bool,
 }
 
 /// A named effect with its evidence and before/after RMS.
@@ -106,6 +118,9 @@ pub struct NamedEffect {
     pub rms_after_heldout: f64,
     /// Correlation of the present residual (main channel) with the effect's predicted change.
     pub correlation: f64,
+    /// The RMS before/after are of the residual left after the form error common to all
+    /// sweeps at each operating point ([`crate::form`]).
+    pub form_corrected: bool,
     /// Fitted parameters (on all sweeps).
     pub params: EffectParams,
 }
@@ -167,6 +182,8 @@ pub struct Diagnosis {
     /// Channels left out of the diagnosis, and why (e.g. `DSTWOWHC not diagnosed: the base's
     /// loaded radius was not fitted from these logs`).
     pub not_diagnosed: Vec<String>,
+    /// State effects were scored against the form error ([`DoctorConfig::form_correction`]).
+    pub form_correction: bool,
     /// Plot data (not serialised).
     #[serde(skip)]
     pub plot: PlotData,
@@ -179,8 +196,13 @@ pub struct PlotData {
     pub meas: Vec<[f64; 4]>,
     /// Base model predictions.
     pub base: Vec<[f64; 4]>,
+    /// Fitted predictions before each named effect (with the form error where it was scored
+    /// with it).
+    pub before: Vec<Vec<[f64; 4]>>,
     /// Fitted predictions after each named effect (index 0 = after the first).
     pub after: Vec<Vec<[f64; 4]>>,
+    /// Held-out predictions before each named effect.
+    pub before_heldout: Vec<Vec<[f64; 4]>>,
     /// Held-out predictions after each named effect.
     pub after_heldout: Vec<Vec<[f64; 4]>>,
     /// Region points of each named effect.
@@ -189,6 +211,25 @@ pub struct PlotData {
 
 /// A candidate's score with its effect set and held-out predictions (testable candidates).
 type Scored = (CandidateScore, Option<(Vec<FitSpec>, Vec<[f64; 4]>)>);
+
+/// The present model's form error, cross-fitted per fold and from all other sweeps.
+struct FormError {
+    /// Per fold: the correction of every point (held-out from training sweeps, training points
+    /// from the other training sweeps).
+    per_fold: Vec<form::FoldCorrection>,
+    /// Every point's correction from all other sweeps (fits on all sweeps).
+    all: form::FoldCorrection,
+    /// Held-out predictions of the present model plus the correction.
+    before_heldout: Vec<[f64; 4]>,
+}
+
+fn add(a: &[[f64; 4]], b: &[[f64; 4]]) -> Vec<[f64; 4]> {
+    a.iter().zip(b).map(|(x, y)| std::array::from_fn(|ch| x[ch] + y[ch])).collect()
+}
+
+fn residual(meas: &[[f64; 4]], pred: &[[f64; 4]]) -> Vec<[f64; 4]> {
+    meas.iter().zip(pred).map(|(m, p)| std::array::from_fn(|ch| m[ch] - p[ch])).collect()
+}
 
 fn rms_of(meas: &[[f64; 4]], pred: &[[f64; 4]], ch: usize, which: &[usize]) -> f64 {
     let (mut s, mut n) = (0.0, 0usize);
@@ -233,6 +274,13 @@ pub fn diagnose(ds: &Dataset, base: &TyreParams, cfg: &DoctorConfig) -> Result<D
         });
     }
     let n_res = count_valid(&meas, &all).max(1) as f64;
+    let mut fold_of = vec![0usize; ds.len()];
+    for (fi, f) in fl.iter().enumerate() {
+        for &k in f {
+            fold_of[k] = fi;
+        }
+    }
+    let bandwidths = Bandwidths::from_data(ds);
     let regions = find_regions(ds, &meas, &base_pred, &sigma);
 
     let mut chosen: Vec<FitSpec> = Vec::new();
@@ -257,6 +305,15 @@ pub fn diagnose(ds: &Dataset, base: &TyreParams, cfg: &DoctorConfig) -> Result<D
             );
             break;
         }
+        // The present model's form error (state candidates are scored against it).
+        let form_error = cfg.form_correction.then(|| {
+            let per_fold = form::cross_fitted(ds, &residual(&meas, &cur_ho), &fl, &bandwidths);
+            let all_corr = form::leave_one_sweep_out(ds, &residual(&meas, &cur_fit), &bandwidths);
+            let before_heldout: Vec<[f64; 4]> =
+                (0..ds.len()).map(|k| std::array::from_fn(|ch| cur_ho[k][ch] + per_fold[fold_of[k]][k][ch])).collect();
+            FormError { per_fold, all: all_corr, before_heldout }
+        });
+        let corrected_for = |eff: Effect| form_error.as_ref().filter(|_| !eff.is_refit());
         let todo: Vec<Effect> =
             cfg.candidates.iter().copied().filter(|e| !chosen.iter().any(|c| c.effect == *e)).collect();
         let score_one = |eff: Effect| -> Scored {
@@ -273,18 +330,29 @@ pub fn diagnose(ds: &Dataset, base: &TyreParams, cfg: &DoctorConfig) -> Result<D
                     evidence: 0.0,
                     delta_chi2_by_channel: [0.0; 4],
                     significant: false,
+                    form_corrected: false,
                 };
                 return (s, None);
             }
+            let fe = corrected_for(eff);
+            let before_ho = fe.map_or(&cur_ho, |f| &f.before_heldout);
+            let fold_chi_before: Vec<f64> = match fe {
+                Some(_) => fl.iter().map(|f| total(chi2(&meas, before_ho, &sigma, f))).collect(),
+                None => fold_chi_before.clone(),
+            };
+            let chi_before: f64 = fold_chi_before.iter().sum();
             let mut specs = chosen.clone();
             let new = FitSpec { effect: eff, params: param_specs(eff, ds, base) };
             let k = new.params.len() + usize::from(eff == Effect::BreakIn);
             specs.push(new);
-            let pred = cross_validate(&ev, &specs, &fl, &meas, sigma, cfg.fit);
+            let pred = match fe {
+                Some(f) => cross_validate_corrected(&ev, &specs, &fl, &meas, sigma, cfg.fit, &f.per_fold),
+                None => cross_validate(&ev, &specs, &fl, &meas, sigma, cfg.fit),
+            };
             let fold_chi: Vec<f64> = fl.iter().map(|f| total(chi2(&meas, &pred, &sigma, f))).collect();
             let chi_after: f64 = fold_chi.iter().sum();
             let improved = fold_chi.iter().zip(&fold_chi_before).filter(|(a, b)| a < b).count();
-            let cb = chi2(&meas, &cur_ho, &sigma, &all);
+            let cb = chi2(&meas, before_ho, &sigma, &all);
             let ca = chi2(&meas, &pred, &sigma, &all);
             let evidence = (chi_before - chi_after - k as f64 * n_res.ln()) / chi_before;
             let significant = evidence >= cfg.min_evidence && improved + 1 >= fl.len();
@@ -300,6 +368,7 @@ pub fn diagnose(ds: &Dataset, base: &TyreParams, cfg: &DoctorConfig) -> Result<D
                 evidence,
                 delta_chi2_by_channel: [cb[0] - ca[0], cb[1] - ca[1], cb[2] - ca[2], cb[3] - ca[3]],
                 significant,
+                form_corrected: fe.is_some(),
             };
             (s, Some((specs, pred)))
         };
@@ -333,8 +402,18 @@ pub fn diagnose(ds: &Dataset, base: &TyreParams, cfg: &DoctorConfig) -> Result<D
             }
             let Some((specs, pred_ho)) = cv_preds[bi].clone() else { continue };
             let score = scores[bi].clone();
-            let (fitted, _) = fit_effects(&ev, &specs, &all, &meas, sigma, cfg.fit);
+            let fe = corrected_for(score.effect);
+            // With the form error: fitted to what the other sweeps at the same operating point
+            // do not explain, and judged against the present model plus that correction.
+            let (fitted, _) = match fe {
+                Some(f) => fit_effects(&ev, &specs, &all, &residual(&meas, &f.all), sigma, cfg.fit),
+                None => fit_effects(&ev, &specs, &all, &meas, sigma, cfg.fit),
+            };
             let pred_fit = ev.predict(&fitted, &all);
+            let (before_fit_c, after_fit_c, before_ho_c) = match fe {
+                Some(f) => (add(&cur_fit, &f.all), add(&pred_fit, &f.all), f.before_heldout.clone()),
+                None => (cur_fit.clone(), pred_fit.clone(), cur_ho.clone()),
+            };
             let ch = (0..4)
                 .max_by(|&a, &b| score.delta_chi2_by_channel[a].total_cmp(&score.delta_chi2_by_channel[b]))
                 .unwrap_or(CH_FY);
@@ -354,7 +433,7 @@ pub fn diagnose(ds: &Dataset, base: &TyreParams, cfg: &DoctorConfig) -> Result<D
                 }
                 thr /= 2.0;
             }
-            let before_ho = rms_of(&meas, &cur_ho, ch, &region);
+            let before_ho = rms_of(&meas, &before_ho_c, ch, &region);
             let after_ho = rms_of(&meas, &pred_ho, ch, &region);
             if after_ho > (1.0 - cfg.min_region_cut) * before_ho {
                 scores[bi].significant = false;
@@ -386,18 +465,28 @@ pub fn diagnose(ds: &Dataset, base: &TyreParams, cfg: &DoctorConfig) -> Result<D
                 channel: CHANNELS[ch].to_owned(),
                 region: describe_region(ds, &ev, score.effect, &region, thr),
                 region_points: region.len(),
-                rms_before: rms_of(&meas, &cur_fit, ch, &region),
-                rms_after: rms_of(&meas, &pred_fit, ch, &region),
+                rms_before: rms_of(&meas, &before_fit_c, ch, &region),
+                rms_after: rms_of(&meas, &after_fit_c, ch, &region),
                 rms_before_heldout: before_ho,
                 rms_after_heldout: after_ho,
                 correlation: corr,
+                form_corrected: fe.is_some(),
                 params: eff_params,
             };
-            accepted = Some((ne, specs, pred_fit, pred_ho, fitted, region));
+            // The model's own held-out predictions go on to the next round (the correction is
+            // not part of the model).
+            let pred_ho_model: Vec<[f64; 4]> = match fe {
+                Some(f) => (0..ds.len())
+                    .map(|k| std::array::from_fn(|c| pred_ho[k][c] - f.per_fold[fold_of[k]][k][c]))
+                    .collect(),
+                None => pred_ho.clone(),
+            };
+            let plots = [before_fit_c, after_fit_c, before_ho_c, pred_ho];
+            accepted = Some((ne, specs, pred_fit, pred_ho_model, fitted, region, plots));
             break;
         }
         rounds.push(scores.clone());
-        let Some((ne, specs, pred_fit, pred_ho, fitted, region)) = accepted else {
+        let Some((ne, specs, pred_fit, pred_ho, fitted, region, plots)) = accepted else {
             let best = order.first().copied();
             stop_reason = match best {
                 Some(i) if !scores[i].reason.is_empty() => {
@@ -420,8 +509,11 @@ pub fn diagnose(ds: &Dataset, base: &TyreParams, cfg: &DoctorConfig) -> Result<D
             break;
         };
         named.push(ne);
-        plot.after.push(pred_fit.clone());
-        plot.after_heldout.push(pred_ho.clone());
+        let [before_fit_c, after_fit_c, before_ho_c, after_ho_c] = plots;
+        plot.before.push(before_fit_c);
+        plot.after.push(after_fit_c);
+        plot.before_heldout.push(before_ho_c);
+        plot.after_heldout.push(after_ho_c);
         plot.region.push(region);
         chosen = specs;
         cur_fit = pred_fit;
@@ -456,6 +548,7 @@ pub fn diagnose(ds: &Dataset, base: &TyreParams, cfg: &DoctorConfig) -> Result<D
         v_ref_mps: ev.v_ref_mps,
         flash_decay_s: ds.flash_decay_s.clone(),
         not_diagnosed,
+        form_correction: cfg.form_correction,
         plot,
     })
 }

@@ -231,6 +231,33 @@ pub fn cross_validate(
     out
 }
 
+/// Cross-validated predictions against the form error ([`crate::form`]): for each held-out
+/// fold the effects are fitted to the training points' measurements less their correction
+/// (from the other training sweeps), and the held-out points are predicted with theirs added.
+pub fn cross_validate_corrected(
+    ev: &Evaluator<'_>,
+    specs: &[FitSpec],
+    folds: &[Vec<usize>],
+    meas: &[[f64; 4]],
+    sigma: [f64; 4],
+    opt: FitOptions,
+    correction: &[crate::form::FoldCorrection],
+) -> Vec<[f64; 4]> {
+    let mut out = vec![[f64::NAN; 4]; ev.ds.len()];
+    for (fi, test) in folds.iter().enumerate() {
+        let Some(corr) = correction.get(fi) else { continue };
+        let train: Vec<usize> =
+            folds.iter().enumerate().filter(|(j, _)| *j != fi).flat_map(|(_, v)| v.iter().copied()).collect();
+        let target: Vec<[f64; 4]> =
+            meas.iter().zip(corr).map(|(m, c)| std::array::from_fn(|ch| m[ch] - c[ch])).collect();
+        let (fitted, _) = fit_effects(ev, specs, &train, &target, sigma, opt);
+        for (k, p) in test.iter().zip(ev.predict(&fitted, test)) {
+            out[*k] = std::array::from_fn(|ch| p[ch] + corr[*k][ch]);
+        }
+    }
+    out
+}
+
 #[cfg(test)]
 mod tests {
     use super::sweep_folds;

@@ -36,6 +36,7 @@ pub mod effects;
 pub mod extension;
 pub mod fit;
 pub mod flash;
+pub mod form;
 pub mod report;
 
 pub use data::{DataOptions, Dataset, RawLog};

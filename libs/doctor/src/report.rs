@@ -96,6 +96,7 @@ pub fn to_json(
             "rms_after": n.rms_after,
             "rms_before_heldout": n.rms_before_heldout,
             "rms_after_heldout": n.rms_after_heldout,
+            "form_corrected": n.form_corrected,
             "correlation": n.correlation,
             "parameters": n.params.keys.iter().zip(&n.params.values).map(|(k, v)| (k.clone(), json!(v))).collect::<serde_json::Map<_, _>>(),
             "break_in_threshold_w": if n.effect == Effect::BreakIn { json!(n.params.threshold_w) } else { Value::Null },
@@ -114,6 +115,7 @@ pub fn to_json(
         "laser_flash_decay_s": dx.flash_decay_s,
         "stop_reason": dx.stop_reason,
         "not_diagnosed": dx.not_diagnosed,
+        "form_correction": dx.form_correction,
         "extended_model": model_file,
         "wall_time_s": wall_time_s,
     })
@@ -301,6 +303,12 @@ pub fn markdown(
         let _ = writeln!(m, "### {}. {}\n", i + 1, n.effect.name());
         let _ = writeln!(m, "Region: {}.\n", n.region);
         let _ = writeln!(m, "Correlation of the residual with the effect's predicted change: {:.3}.\n", n.correlation);
+        if n.form_corrected {
+            let _ = writeln!(
+                m,
+                "Scored against the present model plus its form error (the residual other sweeps show at the same operating point, cross-fitted): the RMS below is what that leaves.\n"
+            );
+        }
         let _ = writeln!(m, "| {} RMS in the region | before | after | change |", n.channel);
         let _ = writeln!(m, "|---|---|---|---|");
         for (what, b, a) in [
@@ -356,7 +364,7 @@ fn plot_residual(path: &Path, ds: &Dataset, dx: &Diagnosis, n: usize) -> Result<
     let ne = &dx.named[n];
     let ch = ch_index(&ne.channel);
     let (sc, unit) = disp(ch);
-    let before = if n == 0 { &dx.plot.base } else { &dx.plot.after_heldout[n - 1] };
+    let before = &dx.plot.before_heldout[n];
     let after = &dx.plot.after_heldout[n];
     let meas = &dx.plot.meas;
     let xs: Vec<f64> = ds.points.iter().map(|&i| ne.effect.variable_value(ds, i)).collect();
@@ -402,7 +410,7 @@ fn plot_overlay(path: &Path, ds: &Dataset, dx: &Diagnosis, n: usize) -> Result<(
     if ch == CH_RL || ch == CH_FX && !ds.has_longitudinal() {
         ch = CH_FY;
     }
-    let before = if n == 0 { &dx.plot.base } else { &dx.plot.after[n - 1] };
+    let before = &dx.plot.before[n];
     let after = &dx.plot.after[n];
     let meas = &dx.plot.meas;
     // The sweep with the most region points.

@@ -45,6 +45,21 @@ pub struct DoctorArgs {
     /// pressure, camber, speed, load, offset)
     #[arg(long)]
     candidates: Option<String>,
+    /// Score state effects against the present model plus its form error (the residual other
+    /// sweeps show at the same operating point): `auto` = on with --fit, off with --model
+    #[arg(long, value_enum, default_value_t = FormCorrection::Auto)]
+    form_correction: FormCorrection,
+}
+
+/// When the doctor separates the model's form error from state effects.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
+pub enum FormCorrection {
+    /// On for a base fitted to the same logs (--fit), off for a given model (--model).
+    Auto,
+    /// Always.
+    On,
+    /// Never.
+    Off,
 }
 
 /// Runs `tyrerig doctor`.
@@ -110,6 +125,11 @@ pub fn run(args: DoctorArgs) -> Result<()> {
         max_effects: args.max_effects,
         candidates,
         not_diagnosed,
+        form_correction: match args.form_correction {
+            FormCorrection::Auto => args.fit,
+            FormCorrection::On => true,
+            FormCorrection::Off => false,
+        },
         ..DoctorConfig::default()
     };
     for nd in &cfg.not_diagnosed {

@@ -56,3 +56,79 @@ fn no_radius_fit_names_nothing_on_the_loaded_radius() {
     let tau_db = taus[1].as_f64().expect("the drive/brake run's flash is found");
     assert!((0.5..=4.0).contains(&tau_db), "flash decay {tau_db} s");
 }
+
+/// A short lateral procedure (`libs/doctor/tests/fixtures/doctor_lateral.toml`: hot sweeps,
+/// a thermal pause, a cool-down, cold sweeps) run on a virtual brush tyre with sensor noise and
+/// tread temperatures, with or without its hidden temperature dependence of friction; returns
+/// `doctor --fit`'s `doctor.json` (the base fitted to the same log: an MF model of a tyre MF
+/// cannot represent exactly).
+fn doctor_on_brush_run(rig: &str, effects: &str, extra: &[&str], out: &str) -> serde_json::Value {
+    let root = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../..");
+    let dir = PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join("doctor_cli").join(out);
+    std::fs::create_dir_all(&dir).expect("output dir");
+    let log = dir.join("run.mcap");
+    let run = Command::new(env!("CARGO_BIN_EXE_tyrerig"))
+        .args(["run", "--headless", "--quiet", "--seed", "1", "--effects", effects])
+        .arg("--rig-config")
+        .arg(root.join("launch-config").join(rig))
+        .arg("--procedure")
+        .arg(root.join("libs/doctor/tests/fixtures/doctor_lateral.toml"))
+        .arg("--out")
+        .arg(&log)
+        .output()
+        .expect("run tyrerig");
+    assert!(run.status.success(), "tyrerig run: {}", String::from_utf8_lossy(&run.stderr));
+    let o = Command::new(env!("CARGO_BIN_EXE_tyrerig"))
+        .arg("doctor")
+        .arg(&log)
+        .args(["--fit", "--out"])
+        .arg(dir.join("doctor"))
+        .args(extra)
+        .output()
+        .expect("run tyrerig");
+    assert!(o.status.success(), "tyrerig doctor: {}", String::from_utf8_lossy(&o.stderr));
+    let json = std::fs::read_to_string(dir.join("doctor/doctor.json")).expect("doctor.json");
+    serde_json::from_str(&json).expect("doctor.json parses")
+}
+
+fn named(d: &serde_json::Value) -> Vec<String> {
+    d["named_effects"].as_array().expect("named_effects").iter().map(|v| v.as_str().unwrap_or("").to_owned()).collect()
+}
+
+/// Acceptance (issue 12): on brush-tyre logs with the hidden temperature dependence of
+/// friction, `thermal` is named first, with its region's held-out RMS cut by at least half —
+/// the base being MF-Tyre 6.1 fitted to the same log, so the doctor works against the MF
+/// form's own misfit of a brush tyre, as on a real tyre.
+fn thermal_is_named_on_brush(rig: &str, out: &str) {
+    let d = doctor_on_brush_run(rig, "noise,thermal,thermal_grip", &[], out);
+    assert_eq!(d["form_correction"].as_bool(), Some(true), "--fit scores state effects against the form error");
+    let names = named(&d);
+    assert_eq!(names.first().map(String::as_str), Some("thermal"), "named {names:?}; {}", d["stop_reason"]);
+    let e = &d["effects"][0];
+    let (before, after) =
+        (e["rms_before_heldout"].as_f64().unwrap_or(0.0), e["rms_after_heldout"].as_f64().unwrap_or(1.0));
+    assert!(after <= 0.5 * before, "held-out RMS in the thermal region {before} → {after}: less than a 50 % cut");
+}
+
+#[test]
+fn brush_road_tyre_thermal_grip_is_named() {
+    thermal_is_named_on_brush("virtual_rig_brush_road.toml", "brush_road_thermal");
+}
+
+#[test]
+fn brush_race_tyre_thermal_grip_is_named() {
+    thermal_is_named_on_brush("virtual_rig_brush_race.toml", "brush_race_thermal");
+}
+
+/// The control: the same runs without the hidden effect, and no radius fit — nothing named,
+/// and DSTWOWHC not diagnosed.
+#[test]
+fn brush_tyres_without_thermal_grip_name_nothing() {
+    for rig in ["virtual_rig_brush_road.toml", "virtual_rig_brush_race.toml"] {
+        let d =
+            doctor_on_brush_run(rig, "noise,thermal", &["--skip-stage", "radius_stiffness"], &format!("{rig}_control"));
+        assert!(named(&d).is_empty(), "{rig}: named {:?} on a log without a hidden effect", named(&d));
+        let nd = d["not_diagnosed"].to_string();
+        assert!(nd.contains("DSTWOWHC not diagnosed"), "{rig}: {nd}");
+    }
+}

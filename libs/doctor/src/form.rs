@@ -1,0 +1,281 @@
+//! The model's form error: the part of the residual that is a fixed function of the operating
+//! point, and so no state effect can be.
+//!
+//! A base model fitted to the logs (`--fit`) is the best MF-Tyre 6.1 can do; on a real tyre (or
+//! the virtual brush tyre) what it leaves is mostly the MF form's own misfit — at a given slip,
+//! load, camber and pressure the same in every sweep. A small state effect (grip that follows
+//! tread temperature by a few per cent) hides under it: scored against the whole held-out χ² it
+//! explains a fraction of a per cent. But a state effect is what makes two visits to the same
+//! operating point disagree. So state candidates are scored against the present model **plus**
+//! a smooth, cross-fitted estimate of that fixed misfit: a kernel average of the residual of
+//! *other sweeps* at neighbouring operating points (local-linear kernel regression, Gaussian
+//! kernels in slip angle, slip ratio, load, camber and pressure). A point is never corrected with its own
+//! sweep's residual (that would absorb a sweep-long effect), nor a held-out point with
+//! held-out data.
+//!
+//! Limits: what the effect does *on average* at an operating point is absorbed with the form
+//! error (a test plan that visits hot cells only at high load cannot separate heat from load);
+//! the effect is then judged on what varies between visits.
+
+use crate::data::Dataset;
+
+/// Gaussian kernel widths of the operating-point smoother.
+#[derive(Debug, Clone, Copy)]
+pub struct Bandwidths {
+    /// Slip angle [deg].
+    pub alpha_deg: f64,
+    /// Slip ratio [-].
+    pub kappa: f64,
+    /// Vertical load [N].
+    pub fz_n: f64,
+    /// Inclination [deg].
+    pub gamma_deg: f64,
+    /// Inflation pressure [Pa].
+    pub p_pa: f64,
+}
+
+impl Bandwidths {
+    /// Widths from the data: slip angle 0.5° (a sweep's curvature resolves within it), slip
+    /// ratio 0.01, and for load, camber and pressure the median spacing of the levels the test
+    /// visited (neighbouring levels then weigh e^−½; a single level gets a wide kernel, so it
+    /// does not matter).
+    pub fn from_data(ds: &Dataset) -> Self {
+        let s = &ds.series;
+        let level_spacing = |v: Vec<f64>, quantum: f64, fallback: f64| -> f64 {
+            let mut lv: Vec<f64> = v.iter().map(|x| (x / quantum).round() * quantum).collect();
+            lv.sort_by(f64::total_cmp);
+            lv.dedup();
+            // Levels closer than three quanta are the same level measured with noise.
+            let mut levels: Vec<f64> = Vec::new();
+            for x in lv {
+                if levels.last().is_none_or(|&l| x - l > 3.0 * quantum) {
+                    levels.push(x);
+                }
+            }
+            let mut gaps: Vec<f64> = levels.windows(2).map(|w| w[1] - w[0]).collect();
+            if gaps.is_empty() {
+                return fallback;
+            }
+            gaps.sort_by(f64::total_cmp);
+            gaps[gaps.len() / 2]
+        };
+        // Per-sweep medians: the levels, not the scatter within a sweep.
+        let per_sweep = |f: &dyn Fn(usize) -> f64| -> Vec<f64> {
+            let mut by_sweep: Vec<Vec<f64>> = vec![Vec::new(); ds.sweeps.len()];
+            for (k, &i) in ds.points.iter().enumerate() {
+                let v = f(i);
+                if let Some(b) = by_sweep.get_mut(ds.point_sweep(k))
+                    && v.is_finite()
+                {
+                    b.push(v);
+                }
+            }
+            by_sweep
+                .into_iter()
+                .filter(|v| !v.is_empty())
+                .map(|mut v| {
+                    v.sort_by(f64::total_cmp);
+                    v[v.len() / 2]
+                })
+                .collect()
+        };
+        Self {
+            alpha_deg: 0.5,
+            kappa: 0.01,
+            fz_n: level_spacing(per_sweep(&|i| s.fz_n[i]), 20.0, 1e6),
+            gamma_deg: level_spacing(per_sweep(&|i| s.gamma_deg[i]), 0.1, 1e3),
+            p_pa: level_spacing(per_sweep(&|i| s.p_pa[i]), 1000.0, 1e8),
+        }
+    }
+}
+
+/// The form-error correction of every point for one held-out fold: held-out points from the
+/// training sweeps, training points from the *other* training sweeps.
+pub type FoldCorrection = Vec<[f64; 4]>;
+
+/// Operating point of a data point, scaled by the bandwidths.
+fn scaled_points(ds: &Dataset, bw: &Bandwidths) -> Vec<[f64; 5]> {
+    let s = &ds.series;
+    ds.points
+        .iter()
+        .map(|&i| {
+            [
+                s.alpha_deg[i] / bw.alpha_deg,
+                s.kappa[i] / bw.kappa,
+                s.fz_n[i] / bw.fz_n,
+                s.gamma_deg[i] / bw.gamma_deg,
+                s.p_pa[i] / bw.p_pa,
+            ]
+        })
+        .collect()
+}
+
+/// Pseudo-weight of a zero residual added to every local fit: where other sweeps barely
+/// reach, the correction fades to nothing instead of copying one distant point.
+const PRIOR_WEIGHT: f64 = 0.05;
+/// Ridge on the local slopes (per bandwidth): a direction the neighbours do not span (all at
+/// one camber) gets no slope instead of an arbitrary one.
+const SLOPE_RIDGE: f64 = 0.5;
+/// Squared scaled distance beyond which a neighbour is ignored (kernel weight < 10⁻³).
+const MAX_D2: f64 = 13.8;
+
+/// Local-linear kernel regression at point `k` of `resid` over the points `from` whose sweep
+/// differs from `k`'s: the form error between neighbouring loads, cambers and pressures is
+/// interpolated along its trend, where a plain kernel average would be pulled towards the
+/// side with more data (the highest load of a test has neighbours only below it).
+fn smooth_at(ds: &Dataset, x: &[[f64; 5]], resid: &[[f64; 4]], from: &[usize], k: usize) -> [f64; 4] {
+    use nalgebra::{Matrix6, Vector6};
+    let own = ds.point_sweep(k);
+    let mut a = [Matrix6::<f64>::zeros(); 4];
+    let mut b = [Vector6::<f64>::zeros(); 4];
+    for &j in from {
+        if ds.point_sweep(j) == own {
+            continue;
+        }
+        let d: [f64; 5] = std::array::from_fn(|m| x[j][m] - x[k][m]);
+        let d2: f64 = d.iter().map(|v| v * v).sum();
+        if d2 > MAX_D2 || !d2.is_finite() {
+            continue;
+        }
+        let w = (-0.5 * d2).exp();
+        let z = Vector6::new(1.0, d[0], d[1], d[2], d[3], d[4]);
+        let wzz = w * z * z.transpose();
+        for ch in 0..4 {
+            let r = resid[j][ch];
+            if r.is_finite() {
+                a[ch] += wzz;
+                b[ch] += w * r * z;
+            }
+        }
+    }
+    std::array::from_fn(|ch| {
+        let mut m = a[ch];
+        m[(0, 0)] += PRIOR_WEIGHT;
+        for i in 1..6 {
+            m[(i, i)] += SLOPE_RIDGE;
+        }
+        m.cholesky().map_or(0.0, |c| c.solve(&b[ch])[0])
+    })
+}
+
+/// Cross-fitted form-error corrections, one per fold (`folds` as in [`crate::fit::folds`]),
+/// of the residual `resid` (measured − present model's held-out prediction).
+pub fn cross_fitted(ds: &Dataset, resid: &[[f64; 4]], folds: &[Vec<usize>], bw: &Bandwidths) -> Vec<FoldCorrection> {
+    let x = scaled_points(ds, bw);
+    let (x, resid) = (&x, resid);
+    // Folds are independent (and each is N² kernel evaluations): one worker per fold.
+    std::thread::scope(|sc| {
+        let handles: Vec<_> = (0..folds.len())
+            .map(|fi| {
+                sc.spawn(move || {
+                    let train: Vec<usize> = folds
+                        .iter()
+                        .enumerate()
+                        .filter(|(j, _)| *j != fi)
+                        .flat_map(|(_, v)| v.iter().copied())
+                        .collect();
+                    (0..ds.len()).map(|k| smooth_at(ds, x, resid, &train, k)).collect::<FoldCorrection>()
+                })
+            })
+            .collect();
+        // A worker only panics on a bug; surface it.
+        handles.into_iter().map(|h| h.join().expect("form-error worker")).collect()
+    })
+}
+
+/// The correction of every point from all other sweeps (for fits on all sweeps).
+pub fn leave_one_sweep_out(ds: &Dataset, resid: &[[f64; 4]], bw: &Bandwidths) -> FoldCorrection {
+    let x = scaled_points(ds, bw);
+    let all: Vec<usize> = (0..ds.len()).collect();
+    (0..ds.len()).map(|k| smooth_at(ds, &x, resid, &all, k)).collect()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::data::{Series, SweepInfo};
+
+    /// Six slip-angle sweeps, two at each of three loads, with a residual that is a fixed
+    /// function of slip angle and load (the form error) plus, in the last sweep only, a
+    /// sweep-long offset (a state effect).
+    fn dataset() -> (Dataset, Vec<[f64; 4]>) {
+        let mut ds = Dataset::default();
+        let mut s = Series::default();
+        let mut resid = Vec::new();
+        let form = |a: f64, fz: f64| 30.0 * (a / 4.0).sin() * fz / 1000.0;
+        for sweep in 0..6 {
+            let fz = 1000.0 * (1 + sweep % 3) as f64;
+            for j in 0..=200 {
+                let a = -10.0 + 0.1 * j as f64;
+                ds.points.push(s.alpha_deg.len());
+                s.alpha_deg.push(a);
+                s.kappa.push(0.0);
+                s.fz_n.push(fz);
+                s.gamma_deg.push(0.0);
+                s.p_pa.push(2.5e5);
+                s.sweep.push(sweep);
+                let state = if sweep == 5 { 50.0 } else { 0.0 };
+                resid.push([form(a, fz) + state, form(a, fz), f64::NAN, 0.0]);
+            }
+            ds.sweeps.push(SweepInfo {
+                name: format!("sw{sweep}"),
+                index_in_log: sweep as u32,
+                log: "t".into(),
+                ordinal: sweep,
+                coupled: false,
+            });
+        }
+        ds.series = s;
+        (ds, resid)
+    }
+
+    #[test]
+    fn bandwidths_follow_the_visited_levels() {
+        let (ds, _) = dataset();
+        let bw = Bandwidths::from_data(&ds);
+        assert!((bw.fz_n - 1000.0).abs() < 1.0, "{bw:?}");
+        assert!(bw.gamma_deg > 100.0 && bw.p_pa > 1e7, "one level: a wide kernel ({bw:?})");
+    }
+
+    #[test]
+    fn other_sweeps_give_the_form_error_but_not_a_sweep_s_own_offset() {
+        let (ds, resid) = dataset();
+        let corr = leave_one_sweep_out(&ds, &resid, &Bandwidths::from_data(&ds));
+        let form_only = |k: usize| resid[k][1];
+        for (k, c) in corr.iter().enumerate() {
+            // Channel 1 has no state effect: the correction reproduces the form error from the
+            // other sweeps (interpolating along load at the highest and lowest loads too).
+            assert!((c[1] - form_only(k)).abs() < 3.0, "point {k}: {} vs {}", c[1], form_only(k));
+            // An all-NaN channel stays uncorrected, not NaN.
+            assert_eq!(c[2], 0.0);
+        }
+        // Channel 0 of the last sweep keeps its own +50 N: the correction there is the form
+        // error (its twin sweep at the same load has no offset).
+        for k in (0..ds.len()).filter(|&k| ds.point_sweep(k) == 5) {
+            let left = resid[k][0] - corr[k][0];
+            assert!((left - 50.0).abs() < 5.0, "point {k}: {left} of the sweep's 50 N left");
+        }
+    }
+
+    #[test]
+    fn held_out_points_are_corrected_from_training_sweeps_only() {
+        let (ds, resid) = dataset();
+        let held_out: Vec<usize> = (0..ds.len()).filter(|&k| ds.point_sweep(k) < 3).collect();
+        let folds = vec![held_out.clone(), (0..ds.len()).filter(|&k| ds.point_sweep(k) >= 3).collect()];
+        let bw = Bandwidths::from_data(&ds);
+        let a = cross_fitted(&ds, &resid, &folds, &bw);
+        // Whatever the held-out sweeps measured, their correction is the same.
+        let mut changed = resid.clone();
+        for &k in &held_out {
+            changed[k][0] += 1000.0;
+        }
+        let b = cross_fitted(&ds, &changed, &folds, &bw);
+        for &k in &held_out {
+            assert_eq!(a[0][k][0], b[0][k][0], "held-out point {k} saw held-out data");
+        }
+        // Fold 1 held out (sweeps 3–5, trained on 0–2 that carry no offset): the form error.
+        for k in (0..ds.len()).filter(|&k| ds.point_sweep(k) == 5) {
+            assert!((a[1][k][0] - resid[k][1]).abs() < 3.0, "point {k}: {} vs {}", a[1][k][0], resid[k][1]);
+        }
+    }
+}
