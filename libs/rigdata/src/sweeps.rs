@@ -339,6 +339,87 @@ fn excursions(x: &[f64], a: usize, b: usize, zero: f64, on: f64, idle: usize) ->
     out
 }
 
+/// Peak ratio between neighbouring lobes (stretches on one side of zero) beyond which they
+/// belong to different sweeps: a sweep's two sides reach about alike; a conditioning sweep to
+/// 4° running straight into a 13° sweep does not.
+const LOBE_PEAK_RATIO: f64 = 2.5;
+
+/// Splits an excursion `(s, e)` of `x` where the slip reach changes from one lobe to the next
+/// by more than [`LOBE_PEAK_RATIO`] — back-to-back sweeps of different reach with no rest at
+/// zero between them, which a sweep that starts while a ramp is excluded (the first sweep
+/// after the rig comes up to speed) otherwise merges with its successor. The split is at the
+/// zero crossing between the two lobes.
+fn split_at_reach_changes(x: &[f64], (s, e): (usize, usize), on: f64) -> Vec<(usize, usize)> {
+    // Lobes: (first row, last row, peak |x|), a new one where the sign flips beyond `on`.
+    let mut lobes: Vec<(usize, usize, f64)> = Vec::new();
+    let mut sign = 0.0;
+    let mut last_small = s;
+    for (i, &v) in x.iter().enumerate().take(e + 1).skip(s) {
+        if v.abs() <= on {
+            last_small = i;
+            continue;
+        }
+        if v.signum() != sign {
+            let cut = if sign == 0.0 { s } else { last_small };
+            if let Some(l) = lobes.last_mut() {
+                l.1 = cut;
+            }
+            lobes.push((cut, e, 0.0));
+            sign = v.signum();
+        }
+        if let Some(l) = lobes.last_mut() {
+            l.2 = l.2.max(v.abs());
+        }
+    }
+    let mut out = Vec::new();
+    let mut start = s;
+    for w in lobes.windows(2) {
+        let (a, b) = (w[0].2, w[1].2);
+        if a.max(b) > LOBE_PEAK_RATIO * a.min(b).max(f64::MIN_POSITIVE) {
+            out.push((start, w[1].0));
+            start = w[1].0;
+        }
+    }
+    out.push((start, e));
+    out
+}
+
+/// Largest gap [rows] between two one-sided halves that are one sweep.
+const HALF_SWEEP_GAP_ROWS: usize = 50;
+
+/// Joins back-to-back one-sided pieces of opposite sign and like reach (within
+/// [`LOBE_PEAK_RATIO`], at most [`HALF_SWEEP_GAP_ROWS`] apart) into one sweep: a sweep whose
+/// first half was counted with the tail of a different sweep before it (and split off again by
+/// [`split_at_reach_changes`]) comes back whole.
+fn join_halves(x: &[f64], pieces: Vec<(usize, usize)>, on: f64) -> Vec<(usize, usize)> {
+    let sides = |(a, b): (usize, usize)| {
+        let w = &x[a..=b.min(x.len().saturating_sub(1))];
+        let reach = w.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+        (w.iter().any(|v| *v > on), w.iter().any(|v| *v < -on), reach)
+    };
+    let mut out: Vec<(usize, usize)> = Vec::new();
+    let mut last_one_sided = false;
+    for p in pieces {
+        if let Some(prev) = out.last_mut()
+            && last_one_sided
+        {
+            let (pp, pn, pr) = sides(*prev);
+            let (cp, cn, cr) = sides(p);
+            let opposite = (pp && !pn && cn && !cp) || (pn && !pp && cp && !cn);
+            let alike = pr.max(cr) <= LOBE_PEAK_RATIO * pr.min(cr);
+            if opposite && alike && p.0 <= prev.1 + HALF_SWEEP_GAP_ROWS {
+                prev.1 = p.1;
+                last_one_sided = false;
+                continue;
+            }
+        }
+        let (cp, cn, _) = sides(p);
+        last_one_sided = cp != cn;
+        out.push(p);
+    }
+    out
+}
+
 /// A held quantity, the reason its rows are excluded when it moves, and its tolerance.
 type HeldCheck<'a> = (&'a [f64], Exclusion, Box<dyn Fn(f64) -> f64 + 'a>);
 
@@ -449,13 +530,21 @@ pub fn find_sweeps(
             }
             let (pa, pb) = (a + s, a + k);
             if m {
-                for (f, l) in excursions(&sa_deg, pa, pb, opt.sa_zero_deg, opt.sa_on_deg, idle) {
+                let pieces: Vec<(usize, usize)> = excursions(&sa_deg, pa, pb, opt.sa_zero_deg, opt.sa_on_deg, idle)
+                    .into_iter()
+                    .flat_map(|ex| split_at_reach_changes(&sa_deg, ex, opt.sa_on_deg))
+                    .collect();
+                for (f, l) in join_halves(&sa_deg, pieces, opt.sa_on_deg) {
                     raw.push((true, f, l));
                 }
                 why[pa..pb].iter_mut().for_each(|w| *w = Some(Exclusion::SlipAngleChange));
             } else {
                 if look_for_kappa {
-                    for (f, l) in excursions(&sig.kappa, pa, pb, kz, kon, idle) {
+                    let pieces: Vec<(usize, usize)> = excursions(&sig.kappa, pa, pb, kz, kon, idle)
+                        .into_iter()
+                        .flat_map(|ex| split_at_reach_changes(&sig.kappa, ex, kon))
+                        .collect();
+                    for (f, l) in join_halves(&sig.kappa, pieces, kon) {
                         raw.push((false, f, l));
                     }
                 }
@@ -624,6 +713,33 @@ mod tests {
         // Back to back: the next starts where the signal last sat at zero.
         assert!((s[0].1..=s[0].1 + 10).contains(&s[1].0), "{s:?}");
         assert!(s[2].0 >= 395 && s[2].1 >= 450 && s[2].1 < 470, "{s:?}");
+    }
+
+    #[test]
+    fn a_short_sweep_running_into_a_long_one_is_split_at_the_zero_crossing() {
+        // The tail of a ±4° conditioning sweep (its start lost to a speed ramp) straight into a
+        // ±13° sweep: one excursion, two sweeps.
+        let mut x: Vec<f64> = (0..40).map(|i| -(i as f64) / 10.0).collect(); // 0 → −4
+        x.extend((0..40).map(|i| -4.0 + i as f64 / 10.0)); // → 0 at row 80
+        x.extend((0..130).map(|i| i as f64 / 10.0)); // → 13
+        x.extend((0..260).map(|i| 13.0 - i as f64 / 10.0)); // → −13
+        x.extend((0..131).map(|i| -13.0 + i as f64 / 10.0)); // → 0
+        let parts = split_at_reach_changes(&x, (0, x.len() - 1), 1.0);
+        assert_eq!(parts.len(), 2, "{parts:?}");
+        assert!((75..=90).contains(&parts[0].1), "{parts:?}");
+        assert_eq!(parts[0].1, parts[1].0);
+        // The excursion logic closed the first piece at the 13° sweep's mid-way zero (it had
+        // seen both sides by then): split, then the two halves of the 13° sweep are one again.
+        let pieces = [(0, 340), (340, x.len() - 1)]
+            .into_iter()
+            .flat_map(|p| split_at_reach_changes(&x, p, 1.0))
+            .collect::<Vec<_>>();
+        let joined = join_halves(&x, pieces, 1.0);
+        assert_eq!(joined.len(), 2, "{joined:?}");
+        assert!((75..=90).contains(&joined[0].1) && joined[1].1 == x.len() - 1, "{joined:?}");
+        // A sweep whose sides reach alike (and noise near zero) stays whole.
+        let y: Vec<f64> = x[80..].iter().enumerate().map(|(i, v)| v + if i % 2 == 0 { 0.3 } else { -0.3 }).collect();
+        assert_eq!(split_at_reach_changes(&y, (0, y.len() - 1), 1.0).len(), 1);
     }
 
     #[test]
