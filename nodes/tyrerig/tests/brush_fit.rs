@@ -67,11 +67,13 @@ fn race_brush_tyre_ttc_runs_fit_physical_and_within_the_limits() {
             "{name}: {coefs:?}"
         );
     }
-    // Camber 0 only in cornering, three cambers in drive/brake: the pure-lateral points of the
-    // slip-ratio sweeps carry camber, so FY's camber stiffness is fitted, not held.
+    // Camber 0 only in cornering; the three cambers of drive/brake reach pure lateral slip only
+    // at the slip-ratio sweeps' zero crossings (28 points, under 20 per camber): too few to fit
+    // camber terms to, so FY's camber stiffness keeps its template value, with the reason.
     let fy = stage("fy_pure");
-    let held: Vec<&str> = fy["held"].as_array().expect("held").iter().filter_map(|h| h["key"].as_str()).collect();
-    assert!(!held.contains(&"PKY6"), "PKY6 held: {held:?}");
+    let fy_held = fy["held"].as_array().expect("held");
+    let pky6 = fy_held.iter().find(|h| h["key"] == "PKY6").unwrap_or_else(|| panic!("PKY6 fitted: {fy_held:?}"));
+    assert!(pky6["reason"].as_str().is_some_and(|r| r.contains("camber level")), "{pky6}");
     // One pressure in drive/brake: FX's pressure terms are held, with the reason.
     let fx = stage("fx_pure");
     let fx_held = fx["held"].as_array().expect("held");
