@@ -98,6 +98,8 @@ pub enum MarginSet {
     FxCombined,
     /// Gyκ in [0, 1] beyond 1° of slip angle (stage `fy_combined`).
     FyCombined,
+    /// Both FY sets: `fy_combined` fitting the pure FY terms too, when no cornering data did.
+    FyPureAndCombined,
 }
 
 impl MarginSet {
@@ -108,7 +110,7 @@ impl MarginSet {
             MarginSet::FxPure => "fx_pure",
             MarginSet::MzPure => "mz_pure",
             MarginSet::FxCombined => "fx_combined",
-            MarginSet::FyCombined => "fy_combined",
+            MarginSet::FyCombined | MarginSet::FyPureAndCombined => "fy_combined",
         }
     }
 }
@@ -139,6 +141,11 @@ fn slip_stiffness(params: &TyreParams, grid: &Grid, fz: f64, g: f64, p: f64, lat
 /// The margins of one set; `described` = with descriptions (for findings), else values only
 /// (for penalties, evaluated thousands of times per fit).
 fn margins_of(params: &TyreParams, set: MarginSet, grid: &Grid, described: bool) -> Vec<Margin> {
+    if set == MarginSet::FyPureAndCombined {
+        let mut both = margins_of(params, MarginSet::FyPure, grid, described);
+        both.extend(margins_of(params, MarginSet::FyCombined, grid, described));
+        return both;
+    }
     let g = |k: &str| params.get(k).unwrap_or(0.0);
     let fz0 = params.fnomin_n();
     let p0 = params.nominal_pressure_pa();
@@ -224,6 +231,8 @@ fn margins_of(params: &TyreParams, set: MarginSet, grid: &Grid, described: bool)
                 push(bt - 0.1, &|| format!("trail Bt = {bt:.3} (≤ 0) at {}", at(fz, gam, p)));
             }
         }
+        // Expanded into its two sets above.
+        MarginSet::FyPureAndCombined => {}
         MarginSet::FxCombined | MarginSet::FyCombined => {
             let lateral = set == MarginSet::FyCombined;
             let a_max = 1.3 * grid.alpha_max_rad;

@@ -21,6 +21,24 @@ const KEYS: [&str; 15] = [
 /// The weighting function's keys (fitted first, before the side-force terms join).
 const WEIGHTING: [&str; 9] = ["RBY1", "RBY2", "RBY3", "RCY1", "REY1", "RHY1", "REY2", "RHY2", "RBY4"];
 
+/// Pure-FY keys the combined sweeps identify when no cornering sweeps fitted them (a
+/// drive/brake/combined run alone): friction with its load and camber terms, cornering
+/// stiffness with its load and camber terms, and the offsets. The curve's shape (C, E) needs a
+/// slip-angle sweep; two or three held slip angles do not give it, so it keeps the template's.
+const PURE_FROM_COMBINED: [&str; 8] = ["PDY1", "PDY2", "PDY3", "PKY1", "PKY2", "PKY6", "PHY1", "PVY1"];
+/// Points a pure-lateral stage needs (`fy_pure`'s minimum).
+const FY_PURE_MIN_POINTS: usize = 50;
+
+/// The pure-FY keys this stage must fit itself: all of [`PURE_FROM_COMBINED`] when `fy_pure`
+/// had too few points to run (and was not skipped on request: then the template is wanted).
+fn pure_keys_to_fit(ctx: &Ctx) -> Vec<&'static str> {
+    if ctx.opts.skip_stages.iter().any(|s| s == "fy_pure") {
+        return Vec::new();
+    }
+    let pure_points = crate::stages::fy_pure::FyPure.select(ctx).map_or(0, |s| s.points.len());
+    if pure_points >= FY_PURE_MIN_POINTS { Vec::new() } else { PURE_FROM_COMBINED.to_vec() }
+}
+
 /// The stage.
 #[derive(Debug)]
 pub struct FyCombined;
@@ -60,8 +78,34 @@ impl Stage for FyCombined {
             [6.0, 4.0, 0.0, 0.9, 0.3, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 1.9, 5.0, 0.0],
         ];
         apply(params, &KEYS, &starts[0]);
+        let pure = pure_keys_to_fit(ctx);
+        // Near-pure points: the combined sweeps' passes through zero slip ratio.
+        let near_pure: Vec<_> = all.iter().copied().filter(|p| p.input.kappa.abs() < 0.02).collect();
+        if !pure.is_empty() {
+            // Friction starts at the largest |FY|/FZ seen near zero slip ratio (a lower bound:
+            // the held slip angles may sit below the peak).
+            let mu = near_pure.iter().map(|p| (p.measured / p.input.fz_n).abs()).fold(0.0, f64::max);
+            if mu > 0.2 && mu.is_finite() {
+                apply(params, &["PDY1", "PDY2"], &[1.05 * mu, 0.0]);
+            }
+            rep.notes.push(format!(
+                "fy_pure had no cornering data: its friction, stiffness and offset terms ({}) are fitted here from the combined sweeps ({} near-pure points; friction starts at {:.2})",
+                pure.join(", "),
+                near_pure.len(),
+                1.05 * mu
+            ));
+        }
+        // Fitting pure FY here, its margins (friction > 0, curvature ≤ 1, stiffness sign) bind too.
+        let margins = if pure.is_empty() { self.margins() } else { Some(MarginSet::FyPureAndCombined) };
         let start = params.clone();
-        decide_keys(ctx, params, &start, rep, &KEYS, data, Channel::Fy);
+        let candidates: Vec<&'static str> = pure.iter().copied().chain(KEYS).collect();
+        decide_keys(ctx, params, &start, rep, &candidates, data, Channel::Fy);
+        let mut steps: Vec<crate::stages::steps::Step> = Vec::new();
+        if !pure.is_empty() && near_pure.len() > 2 * pure.len() {
+            steps.push(("pure from near-pure points", pure.clone(), near_pure.clone()));
+        }
+        steps.push(("weighting", WEIGHTING.to_vec(), all.clone()));
+        steps.push(("all", candidates.clone(), all.clone()));
         let (fz0, p0) = (ctx.nominal.fz0_n, ctx.nominal.p0_pa);
         let mut best: Option<(f64, TyreParams, StageReport)> = None;
         for (i, st) in starts.iter().enumerate() {
@@ -70,17 +114,9 @@ impl Stage for FyCombined {
                 KEYS.iter().copied().zip(st.iter().copied()).filter(|(k, _)| rep.free.contains(k)).unzip();
             apply(&mut trial, &keys, &values);
             let mut r = rep.clone();
-            run_steps(
-                ctx,
-                &mut trial,
-                &mut r,
-                Channel::Fy,
-                all,
-                &[("weighting", WEIGHTING.to_vec(), all.clone()), ("all", KEYS.to_vec(), all.clone())],
-                self.margins(),
-            )?;
+            run_steps(ctx, &mut trial, &mut r, Channel::Fy, all, &steps, margins)?;
             let square = checks::ellipse_squareness(&trial, fz0, p0);
-            let physical = crate::physics::worst(&trial, MarginSet::FyCombined, &ctx.grid).is_none();
+            let physical = margins.is_none_or(|m| crate::physics::worst(&trial, m, &ctx.grid).is_none());
             let ok = physical && square < checks::SQUARE_LIMIT;
             if i > 0 {
                 rep.notes.push(format!(
@@ -114,6 +150,6 @@ impl Stage for FyCombined {
             checks::ellipse_squareness(params, fz0, p0),
             checks::SQUARE_LIMIT
         ));
-        finish(ctx, params, &start, rep, Channel::Fy, data, self.margins())
+        finish(ctx, params, &start, rep, Channel::Fy, data, margins)
     }
 }
