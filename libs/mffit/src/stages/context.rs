@@ -123,6 +123,12 @@ pub fn input_of(s: &Sample, free_rolling: bool) -> MfInput {
 }
 
 impl Ctx<'_> {
+    /// The previous solution `stage` starts from, when the fit is warm-started and that
+    /// solution fitted the stage.
+    pub fn warm(&self, stage: &str) -> Option<&mftyre::TyreParams> {
+        self.opts.warm_start.as_ref().filter(|w| w.stages.iter().any(|s| s == stage)).map(|w| &w.params)
+    }
+
     /// Resampling period of a segment: 10 Hz for free rolling (the thesis's rate); finer for
     /// BrkDrv, whose slip-ratio sweeps cross the peak in a fraction of a second.
     pub fn period_of(&self, seg: &Segment) -> f64 {

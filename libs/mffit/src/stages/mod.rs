@@ -70,6 +70,27 @@ pub struct FitOptions {
     pub folds: usize,
     /// Stages not to run (their coefficients keep template values), by name.
     pub skip_stages: Vec<String>,
+    /// A previous solution to start from (the live fit's update after a new sweep): stages it
+    /// fitted start from its coefficients and run only their final, all-keys step.
+    pub warm_start: Option<WarmStart>,
+}
+
+/// A previous solution a fit starts from ([`FitOptions::warm_start`]).
+#[derive(Debug, Clone)]
+pub struct WarmStart {
+    /// The previous fit's parameters.
+    pub params: TyreParams,
+    /// The stages that previous fit fitted (only these start warm; the others start from the
+    /// data as in a fresh fit).
+    pub stages: Vec<String>,
+}
+
+impl WarmStart {
+    /// The warm start a finished fit gives the next one.
+    pub fn of(result: &FitResult) -> Self {
+        let stages = STAGES.iter().map(|s| s.name()).filter(|n| result.fitted(n)).map(String::from).collect();
+        WarmStart { params: result.params.clone(), stages }
+    }
 }
 
 impl Default for FitOptions {
@@ -86,6 +107,7 @@ impl Default for FitOptions {
             max_iterations: 60,
             folds: 5,
             skip_stages: Vec::new(),
+            warm_start: None,
         }
     }
 }
@@ -135,6 +157,10 @@ pub struct StageReport {
     pub heldout: Option<HeldOut>,
     /// Physical margins of this stage still failing on the final model.
     pub nonphysical: Vec<String>,
+    /// Covariance of the fitted `primary_keys` (row-major, n×n, serial inflation included):
+    /// what the prediction uncertainty of the stage's channel comes from (delta method).
+    #[serde(skip)]
+    pub covariance: Vec<f64>,
 }
 
 impl StageReport {
@@ -161,6 +187,7 @@ impl StageReport {
             levels: None,
             heldout: None,
             nonphysical: Vec::new(),
+            covariance: Vec::new(),
         }
     }
 
