@@ -213,6 +213,15 @@ pub struct Identification {
     pub held: Vec<Held>,
 }
 
+/// True when `held` was held because the data lack levels of what it multiplies (a region of
+/// the operating envelope not tested, e.g. one camber), as [`structural`] words it; false for
+/// keys the Jacobian found without effect or not separable.
+pub fn is_structural(held: &Held) -> bool {
+    held.reason.contains(STRUCTURAL_REASON)
+}
+
+const STRUCTURAL_REASON: &str = "levels, the data have";
+
 /// Keys the structure of the data rules out (too few levels of what they multiply).
 pub fn structural(params: &TyreParams, keys: &[&'static str], levels: &Levels) -> Identification {
     let mut out = Identification::default();
@@ -220,7 +229,7 @@ pub fn structural(params: &TyreParams, keys: &[&'static str], levels: &Levels) -
         let missing: Vec<String> = need(k)
             .iter()
             .filter(|(d, n)| levels.count(*d) < *n)
-            .map(|(d, n)| format!("needs {n} levels, the data have {}", levels.describe(*d)))
+            .map(|(d, n)| format!("needs {n} {STRUCTURAL_REASON} {}", levels.describe(*d)))
             .collect();
         if missing.is_empty() {
             out.free.push(k);

@@ -268,6 +268,83 @@ pub fn prediction_maps(result: &FitResult, grid: &EnvelopeGrid) -> Vec<Predictio
         .collect()
 }
 
+/// How often the predicted 95 % bands hold what they claim, for one channel, on points the
+/// fit never saw ([`coverage`]).
+#[derive(Debug, Clone, PartialEq, serde::Serialize)]
+pub struct Coverage {
+    /// The channel (`FYW`, `FX`, `MZW`).
+    pub channel: String,
+    /// Held-out points scored.
+    pub points: usize,
+    /// % of measured values inside ±1.96·√(σ_model² + RMSE²) (the band for a new measurement).
+    pub measured_in_band_pct: f64,
+    /// % of the reference model's values inside ±1.96·σ_model (the band of the mean), when a
+    /// reference (the virtual rig's true tyre) is given.
+    pub truth_in_band_pct: Option<f64>,
+    /// Median σ_model over the points, channel units.
+    pub median_std: f64,
+    /// The residual RMSE used.
+    pub residual_rmse: f64,
+}
+
+/// Scores the predicted bands of `result` on `other` (data the fit never saw, e.g. a repeat
+/// run): per mapped channel, the same selection of points its stage makes from `other`.
+pub fn coverage(
+    result: &FitResult,
+    other: &crate::Dataset,
+    opts: &crate::FitOptions,
+    truth: Option<&mftyre::TyreParams>,
+) -> Vec<Coverage> {
+    use crate::stages::{Ctx, STAGES};
+    let ctx = Ctx {
+        data: other,
+        opts,
+        nominal: result.nominal.clone(),
+        settings: crate::fit::StepSettings::default(),
+        grid: crate::physics::Grid::of_range(&result.params, &result.range),
+    };
+    let mut out = Vec::new();
+    for channel in MapChannel::ALL {
+        let Some(cov) = ChannelCovariance::of(result, channel) else { continue };
+        let Some(stage) = STAGES.iter().find(|s| s.name() == channel.residual_stage()) else { continue };
+        let Some(sel) = stage.select(&ctx) else { continue };
+        let ch = channel.channel();
+        let (mut n, mut inside, mut truth_inside) = (0usize, 0usize, 0usize);
+        let mut stds = Vec::with_capacity(sel.len());
+        for p in &sel.points {
+            let y = ch.eval(&result.params, &p.input);
+            let sd = cov.std_at(result, channel, &p.input);
+            if !(y.is_finite() && sd.is_finite()) {
+                continue;
+            }
+            n += 1;
+            stds.push(sd);
+            let band = 1.96 * (sd * sd + cov.residual_rmse * cov.residual_rmse).sqrt();
+            if (p.measured - y).abs() <= band {
+                inside += 1;
+            }
+            if let Some(t) = truth
+                && (ch.eval(t, &p.input) - y).abs() <= 1.96 * sd
+            {
+                truth_inside += 1;
+            }
+        }
+        if n == 0 {
+            continue;
+        }
+        let pct = |k: usize| 100.0 * k as f64 / n as f64;
+        out.push(Coverage {
+            channel: channel.tydex_name().into(),
+            points: n,
+            measured_in_band_pct: pct(inside),
+            truth_in_band_pct: truth.map(|_| pct(truth_inside)),
+            median_std: crate::starts::median(stds).unwrap_or(f64::NAN),
+            residual_rmse: cov.residual_rmse,
+        });
+    }
+    out
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

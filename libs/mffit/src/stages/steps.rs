@@ -123,7 +123,8 @@ pub fn run_with_restarts(
     run_steps(ctx, params, rep, channel, all, steps, margins)?;
     let tiny = 1e-6 * peak_abs(all);
     let good_enough = |rmse: f64| rmse <= 1.6 * floor + tiny;
-    if good_enough(rep.rmse) {
+    // A live update continues from the previous solution instead of trying other starts.
+    if good_enough(rep.rmse) || !ctx.restarts() {
         return Ok(());
     }
     rep.notes.push(if floor > 0.0 {
