@@ -3,7 +3,7 @@
 //! log, the rig's true tyre and a second run (another seed) the fit never saw. Not timed: speed
 //! is `tyrerig bench live-fit`'s business. ~1–2 min in release on 2 cores.
 
-use std::path::{Path, PathBuf};
+use std::path::Path;
 
 use livefit::LiveFitConfig;
 use livefit::replay::{feed, inputs_of_log};
@@ -20,7 +20,7 @@ fn spec(seed: u64) -> RunSpec {
 }
 
 /// Runs `spec` headless into `log`, with the live fit when `live` is set; returns the run.
-fn run(spec: &RunSpec, log: &PathBuf, live: bool) -> Headless {
+fn run(spec: &RunSpec, log: &Path, live: bool) -> Headless {
     let mut h = Headless::new(spec, thermal::ThermalConfig::default(), sequencer::SequencerConfig::default()).unwrap();
     if live {
         h = h.with_live_fit(LiveFitConfig::default());

@@ -95,7 +95,7 @@ pub struct WarmStart {
     /// Per stage, the previous report, the signature of its points and the values it set:
     /// a stage whose points are unchanged, after stages that were all unchanged too, is taken
     /// over as it was instead of being refitted.
-    reuse: Vec<(StageReport, u64, Vec<(String, f64)>)>,
+    reuse: Vec<Reusable>,
     /// The previous fit's nominal values (LONGVL, NOMPRES, FNOMIN, UNLOADED_RADIUS): reuse needs
     /// them unchanged.
     nominal: [f64; 4],
@@ -125,7 +125,7 @@ impl WarmStart {
     }
 
     /// The previous report and values of `stage` when its points had `sig`.
-    fn reusable(&self, stage: &str, sig: u64) -> Option<&(StageReport, u64, Vec<(String, f64)>)> {
+    fn reusable(&self, stage: &str, sig: u64) -> Option<&Reusable> {
         self.reuse.iter().find(|(r, s, _)| r.stage == stage && *s == sig)
     }
 
@@ -134,6 +134,9 @@ impl WarmStart {
         self.stages.iter().any(|(s, n)| s == stage && *n == level_counts(levels))
     }
 }
+
+/// A stage's previous report, the signature of its points and the values it set.
+type Reusable = (StageReport, u64, Vec<(String, f64)>);
 
 /// A fingerprint of a stage's points (every input and measured value, bit for bit).
 fn signature(points: &[crate::engine::Point]) -> u64 {
