@@ -435,3 +435,110 @@ pub struct QualityReport {
 }
 
 crate::ros_message!(QualityReport, "tyre_msgs", "QualityReport");
+
+/// `tyre_msgs/ModelCoefficient`: one fitted coefficient of the live fit.
+#[derive(Debug, Clone, PartialEq, Default, Serialize, Deserialize)]
+pub struct ModelCoefficient {
+    /// .tir key (PCY1, QBZ1, ...)
+    pub key: String,
+    /// fitted value
+    pub value: f64,
+    /// standard deviation (1 sigma); NaN/Inf when unidentified
+    pub std: f64,
+}
+
+crate::ros_message!(ModelCoefficient, "tyre_msgs", "ModelCoefficient");
+
+/// `tyre_msgs/ModelStage`: one stage of the live staged fit.
+#[derive(Debug, Clone, PartialEq, Default, Serialize, Deserialize)]
+pub struct ModelStage {
+    /// One of `WAITING`, `FITTING`, `IDENTIFIED`.
+    pub status: u8,
+    /// fy_pure, mz_pure, ...
+    pub stage: String,
+    /// FY, MZ, FX, MX, RL, ...
+    pub channel: String,
+    /// why the stage is not identified yet (empty when it is)
+    pub status_reason: String,
+    /// data points the stage fitted
+    pub points: u32,
+    /// RMS residual, channel units
+    pub rmse: f64,
+    /// RMS residual in % of the stage's peak
+    pub nrmse_pct: f64,
+    /// optimiser iterations in this update
+    pub iterations: u32,
+    /// wall time of the stage in this update \[s\]
+    pub wall_s: f64,
+    /// fitted coefficients with standard deviations
+    pub coefficients: Vec<ModelCoefficient>,
+    /// coefficients kept at template values, as "KEY: reason"
+    pub held: Vec<String>,
+}
+
+crate::ros_message!(ModelStage, "tyre_msgs", "ModelStage", [WAITING, FITTING, IDENTIFIED]);
+
+impl ModelStage {
+    /// no or not enough data for the stage yet
+    pub const WAITING: u8 = 0;
+    /// fitted, but the data do not yet pin every coefficient down
+    pub const FITTING: u8 = 1;
+    /// fitted; every coefficient the stage needs has a finite standard deviation
+    pub const IDENTIFIED: u8 = 2;
+}
+
+/// `tyre_msgs/ModelMap`: one channel's prediction and uncertainty over the envelope grid.
+#[derive(Debug, Clone, PartialEq, Default, Serialize, Deserialize)]
+pub struct ModelMap {
+    /// FYW, FX or MZW
+    pub channel: String,
+    /// slip_angle_deg or slip_ratio
+    pub slip_axis: String,
+    /// the stage's residual RMSE
+    pub residual_rmse: f64,
+    /// model prediction at each grid point
+    pub value: Vec<f64>,
+    /// 1 sigma of the prediction (delta method)
+    pub std: Vec<f64>,
+}
+
+crate::ros_message!(ModelMap, "tyre_msgs", "ModelMap");
+
+/// `tyre_msgs/ModelState`: the live fit's model after the latest completed sweep.
+#[derive(Debug, Clone, PartialEq, Default, Serialize, Deserialize)]
+pub struct ModelState {
+    /// stamp = rig time of the end of the sweep that triggered the update
+    pub header: Header,
+    /// 1 for the first update
+    pub update_index: u32,
+    /// force & moment segments in the data so far
+    pub sweeps_used: u32,
+    /// every data segment so far
+    pub segments_used: u32,
+    /// "section/sweep" of the segment that triggered the update
+    pub last_sweep: String,
+    /// the update at the procedure's end
+    pub final_update: bool,
+    /// wall time the update took \[s\]
+    pub update_wall_s: f64,
+    /// why the update failed (empty when it did not)
+    pub error: String,
+    /// per stage
+    pub stages: Vec<ModelStage>,
+    /// grid loads \[N\]
+    pub grid_fz_n: Vec<f64>,
+    /// slip axis of the FYW and MZW maps \[deg\]
+    pub grid_slip_angle_deg: Vec<f64>,
+    /// slip axis of the FX map
+    pub grid_slip_ratio: Vec<f64>,
+    /// grid cambers \[deg\]
+    pub grid_camber_deg: Vec<f64>,
+    /// grid pressures \[Pa\]
+    pub grid_pressure_pa: Vec<f64>,
+    /// speed of every grid point \[m/s\]
+    pub grid_speed_mps: f64,
+    /// one map per channel
+    pub maps: Vec<ModelMap>,
+}
+
+crate::ros_message!(ModelState, "tyre_msgs", "ModelState");

@@ -20,6 +20,8 @@ pub const SWEEP_SUMMARY: &str = "channels/sweep_summary";
 pub const DERIVED: &str = "channels/derived";
 /// `tyre_msgs/QualityReport`: monitor → all.
 pub const QUALITY_REPORT: &str = "quality/report";
+/// `tyre_msgs/ModelState`: live fit → all.
+pub const MODEL_STATE: &str = "model/state";
 /// `diagnostic_msgs/DiagnosticArray`: every node → all (ROS convention).
 pub const DIAGNOSTICS: &str = "/diagnostics";
 /// `rosgraph_msgs/Clock`: the virtual rig on simulated time (ROS convention).

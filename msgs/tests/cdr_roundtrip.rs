@@ -35,6 +35,10 @@ fn every_type_round_trips() {
     round_trip::<DerivedMeasurement>();
     round_trip::<QualityCheck>();
     round_trip::<QualityReport>();
+    round_trip::<ModelCoefficient>();
+    round_trip::<ModelStage>();
+    round_trip::<ModelMap>();
+    round_trip::<ModelState>();
     round_trip::<Time>();
     round_trip::<Header>();
     round_trip::<KeyValue>();

@@ -219,6 +219,15 @@ pub struct Identification {
     pub held: Vec<Held>,
 }
 
+/// True when `held` was held because the data lack levels of what it multiplies (a region of
+/// the operating envelope not tested, e.g. one camber), as [`structural`] words it; false for
+/// keys the Jacobian found without effect or not separable.
+pub fn is_structural(held: &Held) -> bool {
+    held.reason.contains(STRUCTURAL_REASON)
+}
+
+const STRUCTURAL_REASON: &str = "levels, the data have";
+
 /// Keys the structure of the data rules out (too few levels of what they multiply).
 pub fn structural(params: &TyreParams, keys: &[&'static str], levels: &Levels) -> Identification {
     let mut out = Identification::default();
@@ -226,7 +235,7 @@ pub fn structural(params: &TyreParams, keys: &[&'static str], levels: &Levels) -
         let missing: Vec<String> = need(k)
             .iter()
             .filter(|(d, n)| levels.count(*d) < *n)
-            .map(|(d, n)| format!("needs {n} levels, the data have {}", levels.describe(*d)))
+            .map(|(d, n)| format!("needs {n} {STRUCTURAL_REASON} {}", levels.describe(*d)))
             .collect();
         if missing.is_empty() {
             out.free.push(k);
@@ -355,11 +364,26 @@ pub fn uncertainty(
     channel: Channel,
     threads: usize,
 ) -> (Vec<Estimate>, f64) {
+    let (est, inflation, _) = uncertainty_with_covariance(params, keys, points, groups, channel, threads);
+    (est, inflation)
+}
+
+/// [`uncertainty`] with the whole covariance matrix of `keys` (row-major n×n; empty when it
+/// cannot be computed, infinite entries where a direction is unidentified): the delta method
+/// turns it into the uncertainty of the model's predictions.
+pub fn uncertainty_with_covariance(
+    params: &TyreParams,
+    keys: &[&'static str],
+    points: &[Point],
+    groups: &[usize],
+    channel: Channel,
+    threads: usize,
+) -> (Vec<Estimate>, f64, Vec<f64>) {
     let n = keys.len();
     let m = points.len();
     let nan = |k: &&str| Estimate { key: (*k).into(), value: params.get(k).unwrap_or(f64::NAN), std: f64::NAN };
     if n == 0 || m <= n {
-        return (keys.iter().map(nan).collect(), 1.0);
+        return (keys.iter().map(nan).collect(), 1.0, Vec::new());
     }
     let res: Vec<f64> = points.iter().map(|p| channel.eval(params, &p.input) - p.measured).collect();
     let ssr: f64 = res.iter().map(|r| r * r).sum();
@@ -368,31 +392,37 @@ pub fn uncertainty(
     let j = jacobian(params, keys, points, channel, threads);
     let svd = j.svd(false, true);
     let (Some(vt), sv) = (svd.v_t.as_ref(), &svd.singular_values) else {
-        return (keys.iter().map(nan).collect(), inflation);
+        return (keys.iter().map(nan).collect(), inflation, Vec::new());
     };
     let smax = sv.iter().copied().fold(0.0, f64::max);
-    let estimates = (0..n)
-        .map(|c| {
-            // Var(p_c) = s²·Σ_k V[c,k]² / σ_k²; a (numerically) zero σ_k makes it unbounded.
-            let mut var = 0.0;
+    // Cov = s²·inflation·V·Σ⁻²·Vᵀ; a (numerically) zero σ_k makes the directions it spans unbounded.
+    let scale = s2 * inflation;
+    let mut cov = vec![0.0; n * n];
+    for a in 0..n {
+        for b in 0..n {
+            let mut c = 0.0;
             for k in 0..sv.len() {
-                let v = vt[(k, c)];
+                let (va, vb) = (vt[(k, a)], vt[(k, b)]);
                 if sv[k] <= 1e-13 * smax {
-                    if v.abs() > 1e-9 {
-                        var = f64::INFINITY;
+                    if va.abs() > 1e-9 && vb.abs() > 1e-9 {
+                        c = f64::INFINITY;
+                        break;
                     }
                     continue;
                 }
-                var += v * v / (sv[k] * sv[k]);
+                c += va * vb / (sv[k] * sv[k]);
             }
-            Estimate {
-                key: keys[c].into(),
-                value: params.get(keys[c]).unwrap_or(f64::NAN),
-                std: (s2 * inflation * var).sqrt(),
-            }
+            cov[a * n + b] = scale * c;
+        }
+    }
+    let estimates = (0..n)
+        .map(|c| Estimate {
+            key: keys[c].into(),
+            value: params.get(keys[c]).unwrap_or(f64::NAN),
+            std: cov[c * n + c].sqrt(),
         })
         .collect();
-    (estimates, inflation)
+    (estimates, inflation, cov)
 }
 
 /// (1+ρ)/(1−ρ) from the lag-1 autocorrelation of residuals within groups, in [1, 50].

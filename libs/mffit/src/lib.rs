@@ -31,6 +31,7 @@ pub mod identify;
 pub mod logs;
 pub mod metrics;
 pub mod physics;
+pub mod prediction;
 pub mod report;
 pub mod stages;
 pub mod starts;
@@ -38,4 +39,4 @@ pub mod synth;
 
 pub use data::{Cell, DataKind, Dataset, Origin, Procedure, Sample, Segment, SweepKind, ValidRange};
 pub use error::FitError;
-pub use stages::{FitOptions, FitResult, fit};
+pub use stages::{FitOptions, FitResult, WarmStart, fit};

@@ -85,6 +85,78 @@ fn finish_segment(samples: &mut [Sample]) {
     }
 }
 
+/// Cuts a stream of rig samples into the fitter's segments, each sample under the procedure
+/// state that governs it: a new segment starts whenever the procedure, section, sweep name or
+/// index, or phase changes; only `PHASE_SWEEP` samples of named steps with valid force channels
+/// are kept. Reading a log and the live fit both use it, so both see the same segments.
+#[derive(Debug, Default)]
+pub struct Segmenter {
+    /// The procedure when a state's name does not say it (a log's `procedure` metadata).
+    pub md_procedure: Option<Procedure>,
+    /// A log's `segments` metadata record (sweep index → JSON of kind, cell, origin).
+    pub seg_meta: Option<BTreeMap<String, String>>,
+    key: Option<(String, String, String, u32, u8)>,
+    open: Option<Segment>,
+}
+
+impl Segmenter {
+    /// Feeds one sample under its governing state; returns the segment this sample closed, if
+    /// any (a closed segment with fewer than 3 samples is dropped).
+    pub fn push(&mut self, st: &ProcedureState, s: &RigSample) -> Option<Segment> {
+        let k = (st.procedure.clone(), st.section.clone(), st.sweep_name.clone(), st.sweep_index, st.phase);
+        let mut closed = None;
+        if self.key.as_ref() != Some(&k) {
+            closed = self.finish();
+            self.key = Some(k);
+            if st.phase == ProcedureState::PHASE_SWEEP && !st.sweep_name.is_empty() {
+                let procedure = Procedure::from_name(&st.procedure).or(self.md_procedure).unwrap_or(match s.rig_mode {
+                    RigSetpoint::MODE_COUPLED => Procedure::BrkDrv,
+                    RigSetpoint::MODE_STATIC => Procedure::StaticLong,
+                    _ => Procedure::FreeRolling,
+                });
+                let meta: Option<SegmentMeta> = self
+                    .seg_meta
+                    .as_ref()
+                    .and_then(|m| m.get(&st.sweep_index.to_string()))
+                    .and_then(|j| serde_json::from_str(j).ok());
+                self.open = Some(Segment {
+                    procedure,
+                    kind: meta
+                        .as_ref()
+                        .map(|m| m.kind)
+                        .unwrap_or_else(|| DataKind::from_names(&st.section, &st.sweep_name)),
+                    section: st.section.clone(),
+                    sweep: st.sweep_name.clone(),
+                    samples: Vec::new(),
+                    cell: meta.as_ref().and_then(|m| m.cell),
+                    origin: meta.and_then(|m| m.origin),
+                });
+            }
+        }
+        if let Some(seg) = self.open.as_mut()
+            && s.fault_flags & RigSample::FAULT_FORCE == 0
+        {
+            seg.samples.push(sample_of(s));
+        }
+        closed
+    }
+
+    /// Closes the open segment (end of the stream, or a state change).
+    pub fn finish(&mut self) -> Option<Segment> {
+        let mut s = self.open.take()?;
+        if s.samples.len() < 3 {
+            return None;
+        }
+        finish_segment(&mut s.samples);
+        Some(s)
+    }
+
+    /// True while a segment is open (a sweep is being recorded).
+    pub fn in_segment(&self) -> bool {
+        self.open.is_some()
+    }
+}
+
 /// Reads one MCAP log into segments.
 pub fn read_log(path: &Path) -> Result<Dataset, FitError> {
     read_log_with_warnings(path).map(|(d, _)| d)
@@ -119,59 +191,19 @@ fn read_dataset(reader: &LogReader, path: &Path) -> Result<Dataset, FitError> {
     let md_procedure = md.get("procedure").and_then(|p| p.get("name")).and_then(|n| Procedure::from_name(n));
     let seg_meta = md.get(SEGMENTS_RECORD);
 
+    let mut segmenter = Segmenter { md_procedure, seg_meta: seg_meta.cloned(), ..Segmenter::default() };
     let mut segments: Vec<Segment> = Vec::new();
     let mut si = 0usize;
     let mut current: Option<&ProcedureState> = None;
-    let mut key: Option<(String, String, String, u32, u8)> = None;
-    let mut open: Option<Segment> = None;
-    let close = |open: &mut Option<Segment>, segments: &mut Vec<Segment>| {
-        if let Some(mut s) = open.take()
-            && s.samples.len() >= 3
-        {
-            finish_segment(&mut s.samples);
-            segments.push(s);
-        }
-    };
     for (t, s) in &samples {
         while si < states.len() && states[si].0 <= *t {
             current = Some(&states[si].1);
             si += 1;
         }
         let Some(st) = current else { continue };
-        let k = (st.procedure.clone(), st.section.clone(), st.sweep_name.clone(), st.sweep_index, st.phase);
-        if key.as_ref() != Some(&k) {
-            close(&mut open, &mut segments);
-            key = Some(k);
-            if st.phase == ProcedureState::PHASE_SWEEP && !st.sweep_name.is_empty() {
-                let procedure = Procedure::from_name(&st.procedure).or(md_procedure).unwrap_or(match s.rig_mode {
-                    RigSetpoint::MODE_COUPLED => Procedure::BrkDrv,
-                    RigSetpoint::MODE_STATIC => Procedure::StaticLong,
-                    _ => Procedure::FreeRolling,
-                });
-                let meta: Option<SegmentMeta> = seg_meta
-                    .and_then(|m| m.get(&st.sweep_index.to_string()))
-                    .and_then(|j| serde_json::from_str(j).ok());
-                open = Some(Segment {
-                    procedure,
-                    kind: meta
-                        .as_ref()
-                        .map(|m| m.kind)
-                        .unwrap_or_else(|| DataKind::from_names(&st.section, &st.sweep_name)),
-                    section: st.section.clone(),
-                    sweep: st.sweep_name.clone(),
-                    samples: Vec::new(),
-                    cell: meta.as_ref().and_then(|m| m.cell),
-                    origin: meta.and_then(|m| m.origin),
-                });
-            }
-        }
-        if let Some(seg) = open.as_mut()
-            && s.fault_flags & RigSample::FAULT_FORCE == 0
-        {
-            seg.samples.push(sample_of(s));
-        }
+        segments.extend(segmenter.push(st, s));
     }
-    close(&mut open, &mut segments);
+    segments.extend(segmenter.finish());
     if segments.is_empty() {
         return Err(log_err(path, "no sweep data (no PHASE_SWEEP samples with a sweep name)"));
     }

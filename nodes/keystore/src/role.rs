@@ -20,6 +20,8 @@ pub enum Role {
     Sequencer,
     /// Live channels and the quality monitor (the `quality` node).
     Quality,
+    /// The live MF-Tyre fit (the `fit` node): reads samples and states, publishes the model.
+    Fit,
     /// The recorder: subscribes to every topic, publishes only its alarms on `/diagnostics`.
     Recorder,
     /// An operator station: publishes procedure commands, reads everything.
@@ -31,8 +33,16 @@ pub enum Role {
 use SuiteTopic as T;
 
 impl Role {
-    pub const ALL: [Role; 7] =
-        [Role::Rig, Role::Thermal, Role::Sequencer, Role::Quality, Role::Recorder, Role::Operator, Role::Monitor];
+    pub const ALL: [Role; 8] = [
+        Role::Rig,
+        Role::Thermal,
+        Role::Sequencer,
+        Role::Quality,
+        Role::Fit,
+        Role::Recorder,
+        Role::Operator,
+        Role::Monitor,
+    ];
 
     pub fn name(self) -> &'static str {
         match self {
@@ -40,6 +50,7 @@ impl Role {
             Role::Thermal => "thermal",
             Role::Sequencer => "sequencer",
             Role::Quality => "quality",
+            Role::Fit => "fit",
             Role::Recorder => "recorder",
             Role::Operator => "operator",
             Role::Monitor => "monitor",
@@ -58,6 +69,7 @@ impl Role {
             "thermal" => Some(Role::Thermal),
             "sequencer" => Some(Role::Sequencer),
             "quality" => Some(Role::Quality),
+            "fit" => Some(Role::Fit),
             "recorder" => Some(Role::Recorder),
             // The Foxglove screen reads every topic; one whose launch file lets clients send
             // commands (`allow_commands`) needs an operator enclave, given with `--role`.
@@ -83,6 +95,7 @@ impl Role {
             Role::Thermal => &[T::ThermalState, T::Diagnostics],
             Role::Sequencer => &[T::RigSetpoint, T::ProcedureState, T::Diagnostics],
             Role::Quality => &[T::LiveChannels, T::SweepSummary, T::Derived, T::QualityReport, T::Diagnostics],
+            Role::Fit => &[T::ModelState, T::Diagnostics],
             // The recorder's only output besides its log: its loss and silent-stream alarms
             // (loss is never silent, docs/reliability.md).
             Role::Recorder => &[T::Diagnostics],
@@ -97,7 +110,7 @@ impl Role {
             Role::Rig => &[T::RigSetpoint],
             Role::Thermal => &[T::RigSample, T::ProcedureState],
             Role::Sequencer => &[T::RigSample, T::ThermalState, T::ProcedureCommand],
-            Role::Quality => &[T::RigSample, T::ProcedureState],
+            Role::Quality | Role::Fit => &[T::RigSample, T::ProcedureState],
             Role::Recorder | Role::Operator | Role::Monitor => &SuiteTopic::ALL,
         }
     }

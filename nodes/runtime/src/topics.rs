@@ -10,8 +10,9 @@ use ros2_client::{
 };
 use std::time::Duration;
 use tyre_msgs::{
-    DerivedMeasurement, LiveChannels, ProcedureCommand, ProcedureState, QualityReport, RigSample, RigSetpoint,
-    RosMessage, SweepSummary, ThermalState, diagnostic_msgs::DiagnosticArray, rosgraph_msgs::Clock, topics as names,
+    DerivedMeasurement, LiveChannels, ModelState, ProcedureCommand, ProcedureState, QualityReport, RigSample,
+    RigSetpoint, RosMessage, SweepSummary, ThermalState, diagnostic_msgs::DiagnosticArray, rosgraph_msgs::Clock,
+    topics as names,
 };
 
 /// QoS presets. Names say what the topic is used for, not how DDS does it.
@@ -107,6 +108,7 @@ pub enum SuiteTopic {
     SweepSummary,
     Derived,
     QualityReport,
+    ModelState,
     Diagnostics,
     Clock,
 }
@@ -119,7 +121,7 @@ pub trait TopicVisitor {
 }
 
 impl SuiteTopic {
-    pub const ALL: [SuiteTopic; 11] = [
+    pub const ALL: [SuiteTopic; 12] = [
         SuiteTopic::RigSample,
         SuiteTopic::RigSetpoint,
         SuiteTopic::ProcedureState,
@@ -129,6 +131,7 @@ impl SuiteTopic {
         SuiteTopic::SweepSummary,
         SuiteTopic::Derived,
         SuiteTopic::QualityReport,
+        SuiteTopic::ModelState,
         SuiteTopic::Diagnostics,
         SuiteTopic::Clock,
     ];
@@ -145,6 +148,7 @@ impl SuiteTopic {
             SuiteTopic::SweepSummary => (names::SWEEP_SUMMARY, Qos::Events),
             SuiteTopic::Derived => (names::DERIVED, Qos::Events),
             SuiteTopic::QualityReport => (names::QUALITY_REPORT, Qos::Events),
+            SuiteTopic::ModelState => (names::MODEL_STATE, Qos::State),
             SuiteTopic::Diagnostics => (names::DIAGNOSTICS, Qos::Diagnostics),
             SuiteTopic::Clock => (names::CLOCK, Qos::Clock),
         };
@@ -192,6 +196,7 @@ impl SuiteTopic {
             SuiteTopic::SweepSummary => visitor.visit::<SweepSummary>(self),
             SuiteTopic::Derived => visitor.visit::<DerivedMeasurement>(self),
             SuiteTopic::QualityReport => visitor.visit::<QualityReport>(self),
+            SuiteTopic::ModelState => visitor.visit::<ModelState>(self),
             SuiteTopic::Diagnostics => visitor.visit::<DiagnosticArray>(self),
             SuiteTopic::Clock => visitor.visit::<Clock>(self),
         }

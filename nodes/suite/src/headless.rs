@@ -59,6 +59,10 @@ pub struct Headless {
     wear_true: Vec<f64>,
     /// Live channels and the online quality monitor (one per tyre specimen).
     pipeline: Pipeline,
+    /// The live MF-Tyre fit, when the run has one ([`Headless::with_live_fit`]).
+    live_fit: Option<livefit::LiveFit>,
+    /// Wall time of each live-fit update after a sweep, s (the fitter's own measurement).
+    live_fit_walls: Vec<f64>,
 }
 
 impl std::fmt::Debug for Headless {
@@ -183,7 +187,29 @@ impl Headless {
             max_rig_time_s: spec.max_rig_time_s,
             wear_true: Vec::new(),
             pipeline,
+            live_fit: None,
+            live_fit_walls: Vec::new(),
         })
+    }
+
+    /// Adds the live fit (`docs/live-fit.md`): after every completed data segment the staged
+    /// MF-Tyre 6.1 fit is updated in the loop, before the next sample (so a headless run stays
+    /// deterministic), and its `ModelState` goes to the sink on `model/state`. The run's nominal
+    /// load is the plan's.
+    pub fn with_live_fit(mut self, mut cfg: livefit::LiveFitConfig) -> Self {
+        cfg.fz0_n = cfg.fz0_n.or(Some(self.seq.plan().fz0_n));
+        self.live_fit = Some(livefit::LiveFit::new(cfg));
+        self
+    }
+
+    /// The live fit's final model (after [`Headless::run`]), for the caller to write.
+    pub fn live_fit_result(&self) -> Option<&mffit::FitResult> {
+        self.live_fit.as_ref().and_then(|f| f.latest())
+    }
+
+    /// Wall time of each live-fit update after a sweep, s (the final update not included).
+    pub fn live_fit_update_walls(&self) -> &[f64] {
+        &self.live_fit_walls
     }
 
     /// The expanded plan.
@@ -336,11 +362,21 @@ impl Headless {
 
             let p = self.pipeline.on_sample(&sample);
             self.pipeline_out(t, &p, sink, &mut sum)?;
+            if let Some(fit) = self.live_fit.as_mut()
+                && fit.on_sample(&sample) == livefit::Trigger::Update
+            {
+                let st = fit.update();
+                self.live_fit_walls.push(st.update_wall_s);
+                sink.put(t, Outgoing::Model(&st))?;
+            }
 
             let out = self.seq.step(t, Some(&th.state), Some(&sample));
             if let Some(st) = &out.state {
                 self.gate.on_procedure_state(t, st);
                 self.pipeline.on_procedure_state(st);
+                if let Some(fit) = self.live_fit.as_mut() {
+                    fit.on_procedure_state(st);
+                }
                 sum.on_state(st);
                 progress(st.progress, t);
                 sink.put(t, Outgoing::Procedure(st))?;
@@ -401,6 +437,10 @@ impl Headless {
         let p = self.pipeline.finish();
         let t_end = self.time_offset_s + self.rig.time_s();
         self.pipeline_out(t_end, &p, sink, &mut sum)?;
+        if let Some(fit) = self.live_fit.as_mut() {
+            let st = fit.finish();
+            sink.put(t_end, Outgoing::Model(&st))?;
+        }
         if first_tyre_mounted || self.wear_true.is_empty() {
             self.wear_true.push(self.rig.truth().tread_worn_mm);
         }

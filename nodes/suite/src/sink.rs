@@ -3,8 +3,8 @@
 use mcaplog::{LogWriteError, McapLog, McapLogOptions, codec};
 use std::{collections::BTreeMap, path::Path};
 use tyre_msgs::{
-    DerivedMeasurement, LiveChannels, ProcedureState, QualityReport, RigSample, RigSetpoint, RosMessage, SweepSummary,
-    ThermalState, diagnostic_msgs::DiagnosticArray, topics,
+    DerivedMeasurement, LiveChannels, ModelState, ProcedureState, QualityReport, RigSample, RigSetpoint, RosMessage,
+    SweepSummary, ThermalState, diagnostic_msgs::DiagnosticArray, topics,
 };
 
 /// One message leaving the cores, tagged with its topic.
@@ -19,6 +19,7 @@ pub enum Outgoing<'a> {
     Derived(&'a DerivedMeasurement),
     Quality(&'a QualityReport),
     Diagnostics(&'a DiagnosticArray),
+    Model(&'a ModelState),
 }
 
 impl Outgoing<'_> {
@@ -34,6 +35,7 @@ impl Outgoing<'_> {
             Outgoing::Derived(_) => topics::DERIVED,
             Outgoing::Quality(_) => topics::QUALITY_REPORT,
             Outgoing::Diagnostics(_) => topics::DIAGNOSTICS,
+            Outgoing::Model(_) => topics::MODEL_STATE,
         }
     }
 }
@@ -126,6 +128,7 @@ impl MessageSink for McapSink {
             Outgoing::Derived(m) => self.write(topic, t_s, m),
             Outgoing::Quality(m) => self.write(topic, t_s, m),
             Outgoing::Diagnostics(m) => self.write(topic, t_s, m),
+            Outgoing::Model(m) => self.write(topic, t_s, m),
         }
     }
 }

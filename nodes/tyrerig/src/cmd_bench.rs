@@ -61,6 +61,9 @@ pub enum BenchCmd {
         #[arg(long, default_value_t = 18766)]
         port: u16,
     },
+    /// The live fit (docs/live-fit.md) on a recorded run: wall time of every update, when each
+    /// stage becomes identified; with --offline/--truth/--heldout its accuracy and band coverage.
+    LiveFit(crate::bench_livefit::LiveFitBench),
 }
 
 /// Wall clock, ns since the UNIX epoch.
@@ -139,11 +142,15 @@ pub(crate) fn percentile(sorted: &[f64], p: f64) -> f64 {
 }
 
 pub fn run(cmd: BenchCmd) -> anyhow::Result<()> {
+    if let BenchCmd::LiveFit(args) = &cmd {
+        return crate::bench_livefit::run(args);
+    }
     let rt = tokio::runtime::Builder::new_multi_thread().enable_all().build().context("tokio")?;
     let secure = matches!(cmd, BenchCmd::DdsLatency { secure: true, .. } | BenchCmd::Recorder { secure: true, .. });
     let (cfg, _keystore) = bench_config(secure)?;
     let security = if secure { "secured" } else { "plain" };
     match cmd {
+        BenchCmd::LiveFit(_) => unreachable!("handled before the DDS set-up"),
         BenchCmd::Foxglove { clients, rate_hz, seconds, port } => {
             rt.block_on(crate::bench_foxglove::run(clients, rate_hz, seconds, port))
         }

@@ -64,6 +64,17 @@ pub struct RunArgs {
     /// Over DDS: at most this many times real time (default: as fast as the nodes answer).
     #[arg(long, conflicts_with = "headless")]
     pub max_speed: Option<f64>,
+    /// Run the live MF-Tyre 6.1 fit too (docs/live-fit.md): it publishes `model/state` after
+    /// every completed sweep (recorded in the log) and writes the model at the end. Off by
+    /// default: each update refits the staged model (~0.5–2 s of CPU).
+    #[arg(long)]
+    pub fit: bool,
+    /// With --fit: the fitted .tir written at the end (default: the log's path with .tir).
+    #[arg(long, requires = "fit")]
+    pub fit_tir: Option<PathBuf>,
+    /// With --fit: also write the fit report (report.md, fit.json, plots) into this directory.
+    #[arg(long, requires = "fit")]
+    pub fit_report: Option<PathBuf>,
     /// DDS Security (not with --headless): the SROS2 keystore holding the enclaves /rig/recorder,
     /// /rig/thermal, /rig/sequencer, /rig/quality, /rig/virtual_rig and /rig/run_watcher (and
     /// /rig/foxglove with --foxglove: a monitor, an operator with --foxglove-allow).
@@ -121,6 +132,14 @@ pub fn spec_of(args: &RunArgs) -> RunSpec {
     spec
 }
 
+/// Where `--fit` writes the model.
+fn fit_output(args: &RunArgs) -> livefit::output::ModelOutput {
+    livefit::output::ModelOutput {
+        tir: Some(args.fit_tir.clone().unwrap_or_else(|| args.out.with_extension("tir"))),
+        report: args.fit_report.clone(),
+    }
+}
+
 pub fn run(args: RunArgs) -> anyhow::Result<()> {
     if !args.headless {
         return run_dds(&args);
@@ -131,6 +150,9 @@ pub fn run(args: RunArgs) -> anyhow::Result<()> {
     let spec = spec_of(&args);
     let wall = std::time::Instant::now();
     let mut headless = Headless::new(&spec, thermal::ThermalConfig::default(), sequencer::SequencerConfig::default())?;
+    if args.fit {
+        headless = headless.with_live_fit(livefit::LiveFitConfig::default());
+    }
     let metadata = headless.metadata(&spec);
     let mut sink = McapSink::create(&args.out, "/rig", &metadata)?;
     let planned = headless.plan().estimate_total_s(&procedure::PauseModel::default());
@@ -152,6 +174,19 @@ pub fn run(args: RunArgs) -> anyhow::Result<()> {
     bar.finish_and_clear();
     let messages = sink.finish()?;
     let wall_s = wall.elapsed().as_secs_f64();
+    if args.fit {
+        let result = headless.live_fit_result().context("--fit: the live fit produced no model")?;
+        let files = livefit::output::write_model(result, &fit_output(&args))?;
+        let mut walls = headless.live_fit_update_walls().to_vec();
+        walls.sort_by(f64::total_cmp);
+        println!(
+            "live fit: {} updates, fit wall time per update p50 {:.3} s, p99 {:.3} s; wrote {}",
+            walls.len(),
+            crate::cmd_bench::percentile(&walls, 0.5),
+            crate::cmd_bench::percentile(&walls, 0.99),
+            files.iter().map(|f| f.display().to_string()).collect::<Vec<_>>().join(", ")
+        );
+    }
     println!("{}", summary.table());
     println!(
         "log: {} ({} messages); rig time {:.0} s in {:.1} s wall = {:.0}x real time{}",
@@ -207,6 +242,7 @@ fn run_dds(args: &RunArgs) -> anyhow::Result<()> {
     let headless = Headless::new(&spec, thermal::ThermalConfig::default(), sequencer::SequencerConfig::default())?;
     let mut metadata = headless.metadata(&spec);
     let planned = headless.plan().estimate_total_s(&procedure::PauseModel::default());
+    let headless_fz0 = headless.plan().fz0_n;
     drop(headless);
     if let Some(sw) = metadata.get_mut("tyrerig") {
         sw.insert("mode".to_owned(), "dds".to_owned());
@@ -229,8 +265,8 @@ fn run_dds(args: &RunArgs) -> anyhow::Result<()> {
     if let Some(e) = &spec.effects {
         rig.push(("effects", V::String(e.clone())));
     }
-    // Thermal, sequencer, quality and recorder all read the samples: none may miss the start.
-    rig.push(("wait_for_subscribers", V::Integer(4)));
+    // Thermal, sequencer, quality and recorder (and the fit) read the samples: none may miss the start.
+    rig.push(("wait_for_subscribers", V::Integer(if args.fit { 5 } else { 4 })));
     if let Some(m) = args.max_speed {
         rig.push(("max_time_scale", V::Float(m)));
     }
@@ -270,6 +306,19 @@ fn run_dds(args: &RunArgs) -> anyhow::Result<()> {
         NodeEntry { name: "quality".into(), kind: "quality".into(), config: table(&quality) },
         NodeEntry { name: "virtual_rig".into(), kind: "virtual_rig".into(), config: table(&rig) },
     ];
+    if args.fit {
+        let out = fit_output(args);
+        let mut output = vec![];
+        if let Some(t) = &out.tir {
+            output.push(("tir", path_value(t)?));
+        }
+        if let Some(r) = &out.report {
+            output.push(("report", path_value(r)?));
+        }
+        let fit = vec![("fz0_n", V::Float(headless_fz0))];
+        let config = table(&[("fit", V::Table(table(&fit))), ("output", V::Table(table(&output)))]);
+        nodes.push(NodeEntry { name: "fit".into(), kind: "fit".into(), config });
+    }
     if let Some(port) = args.foxglove {
         let foxglove = vec![
             ("host", V::String(args.foxglove_host.clone())),

@@ -57,10 +57,12 @@ pub enum NodeKind {
     Quality,
     /// The Foxglove WebSocket server for control-room screens (`foxglove_node`).
     Foxglove,
+    /// The live MF-Tyre 6.1 fit (`livefit::shell`).
+    Fit,
 }
 
 impl NodeKind {
-    pub const ALL: [NodeKind; 7] = [
+    pub const ALL: [NodeKind; 8] = [
         NodeKind::Recorder,
         NodeKind::TestPattern,
         NodeKind::VirtualRig,
@@ -68,6 +70,7 @@ impl NodeKind {
         NodeKind::Sequencer,
         NodeKind::Quality,
         NodeKind::Foxglove,
+        NodeKind::Fit,
     ];
 
     pub fn name(self) -> &'static str {
@@ -79,6 +82,7 @@ impl NodeKind {
             NodeKind::Sequencer => "sequencer",
             NodeKind::Quality => "quality",
             NodeKind::Foxglove => "foxglove",
+            NodeKind::Fit => "fit",
         }
     }
 
@@ -192,6 +196,9 @@ fn typed_config_check(entry: &NodeEntry) -> anyhow::Result<()> {
             let c: foxglove_node::FoxgloveNodeConfig = config_of(entry)?;
             c.validate()?;
         }
+        Some(NodeKind::Fit) => {
+            let _: livefit::shell::FitNodeConfig = config_of(entry)?;
+        }
         None => bail!("unknown node kind {:?}", entry.kind),
     }
     Ok(())
@@ -235,6 +242,12 @@ pub async fn run_node(entry: &NodeEntry, runtime: &RuntimeConfig, shutdown: Shut
             let mut c: foxglove_node::FoxgloveNodeConfig = config_of(entry)?;
             c.procedure = c.procedure.map(|p| resolve(entry, &p));
             foxglove_node::run(node, c, shutdown).await?;
+        }
+        Some(NodeKind::Fit) => {
+            let mut c: livefit::shell::FitNodeConfig = config_of(entry)?;
+            c.output.tir = c.output.tir.map(|p| resolve(entry, &p));
+            c.output.report = c.output.report.map(|p| resolve(entry, &p));
+            livefit::shell::run(node, c, shutdown).await?;
         }
         None => bail!("unknown node kind {:?}", entry.kind),
     }

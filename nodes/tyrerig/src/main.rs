@@ -8,6 +8,7 @@ use clap::{Parser, Subcommand};
 
 // --- subcommand modules (one per capability) ---
 mod bench_foxglove;
+mod bench_livefit;
 mod cmd_bench;
 mod cmd_command;
 mod cmd_data;

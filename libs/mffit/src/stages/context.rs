@@ -123,6 +123,18 @@ pub fn input_of(s: &Sample, free_rolling: bool) -> MfInput {
 }
 
 impl Ctx<'_> {
+    /// The previous solution `stage` starts from, when the fit is warm-started and that
+    /// solution fitted the stage.
+    pub fn warm(&self, stage: &str) -> Option<&mftyre::TyreParams> {
+        self.opts.warm_start.as_ref().filter(|w| w.stages.iter().any(|(s, _)| s == stage)).map(|w| &w.params)
+    }
+
+    /// True when a stage stuck above its noise floor may try other starts
+    /// ([`FitOptions::restarts`]).
+    pub fn restarts(&self) -> bool {
+        self.opts.restarts
+    }
+
     /// Resampling period of a segment: 10 Hz for free rolling (the thesis's rate); finer for
     /// BrkDrv, whose slip-ratio sweeps cross the peak in a fraction of a second.
     pub fn period_of(&self, seg: &Segment) -> f64 {

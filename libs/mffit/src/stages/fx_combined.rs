@@ -69,7 +69,10 @@ impl Stage for FxCombined {
             let mut trial = params.clone();
             let (keys, values): (Vec<&'static str>, Vec<f64>) =
                 KEYS.iter().copied().zip(st.iter().copied()).filter(|(k, _)| rep.free.contains(k)).unzip();
-            apply(&mut trial, &keys, &values);
+            // Warm: the first trial is the previous solution (decide_keys put it in place).
+            if i > 0 || ctx.warm(self.name()).is_none() {
+                apply(&mut trial, &keys, &values);
+            }
             let mut r = rep.clone();
             run_steps(
                 ctx,

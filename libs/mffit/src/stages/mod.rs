@@ -70,6 +70,90 @@ pub struct FitOptions {
     pub folds: usize,
     /// Stages not to run (their coefficients keep template values), by name.
     pub skip_stages: Vec<String>,
+    /// Try other starting values when a stage ends above its noise floor (as a fresh fit does);
+    /// a live update after a sweep turns it off and continues from the previous solution.
+    pub restarts: bool,
+    /// A previous solution to start from (the live fit's update after a new sweep): stages it
+    /// fitted start from its coefficients and run only their final, all-keys step.
+    pub warm_start: Option<WarmStart>,
+}
+
+/// A previous solution a fit starts from ([`FitOptions::warm_start`]).
+///
+/// A stage starts warm when the previous fit fitted it and its data still hold the same
+/// operating levels (loads, pressures, cambers, speeds): a new level frees coefficients the
+/// previous solution never had, and the stage is then fitted from the data in its steps, as in
+/// a fresh fit (a warm start would put them in at "no such effect" and could stay in a local
+/// minimum of the others).
+#[derive(Debug, Clone)]
+pub struct WarmStart {
+    /// The previous fit's parameters.
+    pub params: TyreParams,
+    /// The stages that previous fit fitted, with the number of load, pressure, camber and speed
+    /// levels in their points.
+    pub stages: Vec<(String, [usize; 4])>,
+    /// Per stage, the previous report, the signature of its points and the values it set:
+    /// a stage whose points are unchanged, after stages that were all unchanged too, is taken
+    /// over as it was instead of being refitted.
+    reuse: Vec<Reusable>,
+    /// The previous fit's nominal values (LONGVL, NOMPRES, FNOMIN, UNLOADED_RADIUS): reuse needs
+    /// them unchanged.
+    nominal: [f64; 4],
+}
+
+impl WarmStart {
+    /// The warm start a finished fit gives the next one.
+    pub fn of(result: &FitResult) -> Self {
+        let stages = result
+            .stages
+            .iter()
+            .filter(|r| result.fitted(&r.stage))
+            .filter_map(|r| Some((r.stage.clone(), level_counts(r.levels.as_ref()?))))
+            .collect();
+        let reuse = result
+            .stages
+            .iter()
+            .filter_map(|r| {
+                let d = result.data.iter().find(|d| d.stage == r.stage)?;
+                let keys = r.keys.iter().cloned().chain(r.held.iter().map(|h| h.key.clone()));
+                let values = keys.filter_map(|k| result.params.get(&k).map(|v| (k, v))).collect();
+                Some((r.clone(), signature(&d.points), values))
+            })
+            .collect();
+        let n = &result.nominal;
+        WarmStart { params: result.params.clone(), stages, reuse, nominal: [n.v0_mps, n.p0_pa, n.fz0_n, n.r0_m] }
+    }
+
+    /// The previous report and values of `stage` when its points had `sig`.
+    fn reusable(&self, stage: &str, sig: u64) -> Option<&Reusable> {
+        self.reuse.iter().find(|(r, s, _)| r.stage == stage && *s == sig)
+    }
+
+    /// True when `stage` may start warm on points with `levels`.
+    fn admits(&self, stage: &str, levels: &Levels) -> bool {
+        self.stages.iter().any(|(s, n)| s == stage && *n == level_counts(levels))
+    }
+}
+
+/// A stage's previous report, the signature of its points and the values it set.
+type Reusable = (StageReport, u64, Vec<(String, f64)>);
+
+/// A fingerprint of a stage's points (every input and measured value, bit for bit).
+fn signature(points: &[crate::engine::Point]) -> u64 {
+    use std::hash::{Hash, Hasher};
+    let mut h = std::collections::hash_map::DefaultHasher::new();
+    points.len().hash(&mut h);
+    for p in points {
+        let x = &p.input;
+        for v in [x.fz_n, x.kappa, x.alpha_rad, x.gamma_rad, x.vx_mps, x.p_pa, x.omega_radps, p.measured] {
+            v.to_bits().hash(&mut h);
+        }
+    }
+    h.finish()
+}
+
+fn level_counts(l: &Levels) -> [usize; 4] {
+    [l.loads_n.len(), l.pressures_pa.len(), l.cambers_rad.len(), l.speeds_mps.len()]
 }
 
 impl Default for FitOptions {
@@ -86,6 +170,8 @@ impl Default for FitOptions {
             max_iterations: 60,
             folds: 5,
             skip_stages: Vec::new(),
+            restarts: true,
+            warm_start: None,
         }
     }
 }
@@ -135,6 +221,10 @@ pub struct StageReport {
     pub heldout: Option<HeldOut>,
     /// Physical margins of this stage still failing on the final model.
     pub nonphysical: Vec<String>,
+    /// Covariance of the fitted `primary_keys` (row-major, n×n, serial inflation included):
+    /// what the prediction uncertainty of the stage's channel comes from (delta method).
+    #[serde(skip)]
+    pub covariance: Vec<f64>,
 }
 
 impl StageReport {
@@ -161,6 +251,7 @@ impl StageReport {
             levels: None,
             heldout: None,
             nonphysical: Vec::new(),
+            covariance: Vec::new(),
         }
     }
 
@@ -295,6 +386,11 @@ pub fn fit(data: &Dataset, opts: &FitOptions) -> Result<FitResult, FitError> {
     nom.wall_s = t_start.elapsed().as_secs_f64();
     stages.push(nom);
 
+    // Stages are reused only while every stage before them was (their inputs are unchanged).
+    let mut unchanged_so_far = opts
+        .warm_start
+        .as_ref()
+        .is_some_and(|w| w.nominal == [nominal.v0_mps, nominal.p0_pa, nominal.fz0_n, nominal.r0_m]);
     for stage in STAGES {
         let t = Instant::now();
         let mut rep = StageReport::new(stage.name(), stage.channel().name());
@@ -305,7 +401,43 @@ pub fn fit(data: &Dataset, opts: &FitOptions) -> Result<FitResult, FitError> {
         }
         let selection = stage.select(&ctx).unwrap_or_default();
         rep.peak = context::peak_abs(&selection.points);
-        match stage.fit(&ctx, &mut params, &selection, &mut rep) {
+        // Unchanged points after unchanged stages: the previous result stands.
+        let sig = signature(&selection.points);
+        if let Some((prev, _, values)) =
+            opts.warm_start.as_ref().filter(|_| unchanged_so_far).and_then(|w| w.reusable(stage.name(), sig))
+        {
+            for (k, v) in values {
+                let _ = params.set(k, *v);
+            }
+            let mut rep = prev.clone();
+            rep.wall_s = t.elapsed().as_secs_f64();
+            rep.iterations = 0;
+            stages.push(rep);
+            stage_data.push(StageData {
+                stage: stage.name().into(),
+                channel: stage.channel(),
+                points: selection.points,
+                groups: selection.groups,
+            });
+            continue;
+        }
+        unchanged_so_far = false;
+        // Warm only where the previous solution saw the same levels (else fitted as in a fresh fit).
+        let warm = opts
+            .warm_start
+            .as_ref()
+            .is_some_and(|w| w.admits(stage.name(), &Levels::of(&selection.points, ctx.nominal.fz0_n)));
+        let cold_opts;
+        let cold_ctx;
+        let stage_ctx = if warm || opts.warm_start.is_none() {
+            &ctx
+        } else {
+            cold_opts = FitOptions { warm_start: None, ..opts.clone() };
+            cold_ctx = Ctx { data, opts: &cold_opts, nominal: nominal.clone(), settings, grid: ctx.grid.clone() };
+            rep.notes.push("new operating levels in the data: fitted from the data's start, not warm".into());
+            &cold_ctx
+        };
+        match stage.fit(stage_ctx, &mut params, &selection, &mut rep) {
             Ok(()) => {
                 if !selection.is_empty() {
                     stage_data.push(StageData {

@@ -60,7 +60,10 @@ impl Stage for Mx {
             NONLINEAR.iter().copied().zip(NONLINEAR_START).filter(|(k, _)| rep.free.contains(k)).collect();
         if !free_nonlinear.is_empty() {
             let (k, v): (Vec<&'static str>, Vec<f64>) = free_nonlinear.into_iter().unzip();
-            apply(params, &k, &v);
+            // Warm: the nonlinear terms continue from the previous solution instead.
+            if ctx.warm(self.name()).is_none() {
+                apply(params, &k, &v);
+            }
             let mut r = rep.clone();
             run_steps(ctx, params, &mut r, Channel::Mx, all, &[("all", candidates.clone(), all.clone())], None)?;
             if r.rmse.is_finite() && r.rmse < linear_rep.rmse {

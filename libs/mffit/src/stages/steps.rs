@@ -38,6 +38,15 @@ pub fn decide_keys(
         hold(params, start, rep, h);
     }
     rep.levels = Some(levels);
+    // Warm start: the identifiable keys continue from the previous solution (a key that just
+    // became identifiable has the value it was held at there, i.e. "no such effect").
+    if let Some(warm) = ctx.warm(&rep.stage) {
+        for k in &rep.free {
+            if let Some(v) = warm.get(k).filter(|v| v.is_finite()) {
+                let _ = params.set(k, v);
+            }
+        }
+    }
 }
 
 fn hold(params: &mut TyreParams, start: &TyreParams, rep: &mut StageReport, mut h: Held) {
@@ -63,6 +72,12 @@ pub fn run_steps(
     let scale = peak_abs(all) / 100.0;
     rep.initial_rmse = rms(params, all, channel);
     let mut outs = Vec::new();
+    // Warm-started from a solution on most of the same data, the stepwise approach (nominal,
+    // then camber, then pressure) has nothing left to do: only the final step, with every key.
+    let steps = match (ctx.warm(&rep.stage), steps.split_last()) {
+        (Some(_), Some((last, _))) => std::slice::from_ref(last),
+        _ => steps,
+    };
     for (label, keys, pts) in steps {
         let keys: Vec<&'static str> = keys.iter().copied().filter(|k| rep.free.contains(k)).collect();
         if keys.is_empty() {
@@ -108,7 +123,8 @@ pub fn run_with_restarts(
     run_steps(ctx, params, rep, channel, all, steps, margins)?;
     let tiny = 1e-6 * peak_abs(all);
     let good_enough = |rmse: f64| rmse <= 1.6 * floor + tiny;
-    if good_enough(rep.rmse) {
+    // A live update continues from the previous solution instead of trying other starts.
+    if good_enough(rep.rmse) || !ctx.restarts() {
         return Ok(());
     }
     rep.notes.push(if floor > 0.0 {
@@ -188,10 +204,11 @@ pub fn finish(
         }
     }
     let fitted: Vec<&'static str> = rep.free.iter().copied().filter(|k| rep.keys.iter().any(|x| x == k)).collect();
-    let (est, inflation) =
-        identify::uncertainty(params, &fitted, &all.points, &all.groups, channel, ctx.settings.threads);
+    let (est, inflation, covariance) =
+        identify::uncertainty_with_covariance(params, &fitted, &all.points, &all.groups, channel, ctx.settings.threads);
     rep.estimates = est;
     rep.serial_inflation = inflation;
+    rep.covariance = covariance;
     rep.primary_keys = fitted;
     Ok(())
 }

@@ -1,0 +1,368 @@
+//! How sure the fitted model is of what it predicts: the delta method on the stages' parameter
+//! covariances, over a fixed operating-envelope grid.
+//!
+//! For a model output y(x; p) and parameter covariance Σ, Var y(x) ≈ gᵀ Σ g with g = ∂y/∂p at
+//! the fitted p (central differences, steps scaled to each coefficient as in the fit's
+//! Jacobian). The stages are fitted one after another, each on its own data, so their
+//! covariances are taken as independent (block-diagonal Σ): FY pure uses `fy_pure`'s, FX pure
+//! `fx_pure`'s, MZ pure `fy_pure`'s and `mz_pure`'s (the aligning moment is trail × Fy plus the
+//! residual torque).
+//!
+//! That is the uncertainty of the model's *mean* prediction. A new measurement at x also carries
+//! the rig's noise and whatever the model cannot represent, estimated by the stage's residual
+//! RMSE: the 95 % band for a new measured point is ±1.96·√(σ_model² + RMSE²).
+
+use mftyre::MfInput;
+
+use crate::engine::{Channel, values_of};
+use crate::stages::FitResult;
+
+/// The operating-envelope grid the prediction uncertainty is mapped on. Fixed for a run (it
+/// comes from the run's nominal load and pressure, not from the data so far), so successive
+/// maps of a live fit compare point by point.
+#[derive(Debug, Clone, PartialEq)]
+pub struct EnvelopeGrid {
+    /// Vertical loads, N.
+    pub fz_n: Vec<f64>,
+    /// Slip angles of the FY and MZ maps, deg.
+    pub slip_angle_deg: Vec<f64>,
+    /// Slip ratios of the FX map.
+    pub slip_ratio: Vec<f64>,
+    /// Cambers, deg.
+    pub camber_deg: Vec<f64>,
+    /// Inflation pressures, Pa.
+    pub pressure_pa: Vec<f64>,
+    /// Speed of every grid point, m/s.
+    pub speed_mps: f64,
+}
+
+impl EnvelopeGrid {
+    /// Load fractions of Fz0.
+    pub const LOAD_FRACTIONS: [f64; 4] = [0.5, 1.0, 1.5, 2.0];
+    /// Slip angles, deg (dense near zero, where the cornering stiffness lives).
+    pub const SLIP_ANGLES_DEG: [f64; 11] = [-12.0, -8.0, -4.0, -2.0, -1.0, 0.0, 1.0, 2.0, 4.0, 8.0, 12.0];
+    /// Slip ratios.
+    pub const SLIP_RATIOS: [f64; 11] = [-0.2, -0.1, -0.05, -0.02, -0.01, 0.0, 0.01, 0.02, 0.05, 0.1, 0.2];
+    /// Cambers, deg.
+    pub const CAMBERS_DEG: [f64; 5] = [-4.0, -2.0, 0.0, 2.0, 4.0];
+    /// Pressure fractions of the nominal pressure.
+    pub const PRESSURE_FRACTIONS: [f64; 3] = [0.85, 1.0, 1.15];
+
+    /// The standard grid for a tyre of nominal load `fz0_n`, pressure `p0_pa`, speed `v0_mps`:
+    /// load {0.5, 1, 1.5, 2}·Fz0 × slip (11 values) × camber {−4, −2, 0, 2, 4}° × pressure
+    /// {0.85, 1, 1.15}·P0 = 660 points per channel.
+    pub fn standard(fz0_n: f64, p0_pa: f64, v0_mps: f64) -> Self {
+        EnvelopeGrid {
+            fz_n: Self::LOAD_FRACTIONS.iter().map(|f| f * fz0_n).collect(),
+            slip_angle_deg: Self::SLIP_ANGLES_DEG.to_vec(),
+            slip_ratio: Self::SLIP_RATIOS.to_vec(),
+            camber_deg: Self::CAMBERS_DEG.to_vec(),
+            pressure_pa: Self::PRESSURE_FRACTIONS.iter().map(|f| f * p0_pa).collect(),
+            speed_mps: v0_mps,
+        }
+    }
+
+    /// Points per map (load × slip × camber × pressure).
+    pub fn len(&self) -> usize {
+        self.fz_n.len()
+            * self.slip_angle_deg.len().max(self.slip_ratio.len())
+            * self.camber_deg.len()
+            * self.pressure_pa.len()
+    }
+
+    /// True for a grid without points.
+    pub fn is_empty(&self) -> bool {
+        self.len() == 0
+    }
+
+    /// The model inputs of `channel`'s map, load slowest, then slip, camber, pressure fastest.
+    pub fn inputs(&self, channel: MapChannel, r0_m: f64) -> Vec<MfInput> {
+        let slips: &[f64] = match channel {
+            MapChannel::FxPure => &self.slip_ratio,
+            MapChannel::FyPure | MapChannel::MzPure => &self.slip_angle_deg,
+        };
+        let mut out =
+            Vec::with_capacity(self.fz_n.len() * slips.len() * self.camber_deg.len() * self.pressure_pa.len());
+        for &fz in &self.fz_n {
+            for &slip in slips {
+                for &camber in &self.camber_deg {
+                    for &p in &self.pressure_pa {
+                        let (kappa, alpha_rad) = match channel {
+                            MapChannel::FxPure => (slip, 0.0),
+                            _ => (0.0, slip.to_radians()),
+                        };
+                        out.push(MfInput {
+                            fz_n: fz,
+                            kappa,
+                            alpha_rad,
+                            gamma_rad: camber.to_radians(),
+                            phit_per_m: 0.0,
+                            vx_mps: self.speed_mps,
+                            p_pa: p,
+                            omega_radps: self.speed_mps * (1.0 + kappa) / r0_m.max(0.1),
+                        });
+                    }
+                }
+            }
+        }
+        out
+    }
+}
+
+/// The channels with an uncertainty map.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum MapChannel {
+    /// Pure lateral force over slip angle (κ = 0).
+    FyPure,
+    /// Pure longitudinal force over slip ratio (α = 0).
+    FxPure,
+    /// Pure aligning moment over slip angle (κ = 0).
+    MzPure,
+}
+
+impl MapChannel {
+    /// Every mapped channel.
+    pub const ALL: [MapChannel; 3] = [MapChannel::FyPure, MapChannel::FxPure, MapChannel::MzPure];
+
+    /// The model channel evaluated.
+    pub fn channel(self) -> Channel {
+        match self {
+            MapChannel::FyPure => Channel::Fy0,
+            MapChannel::FxPure => Channel::Fx0,
+            MapChannel::MzPure => Channel::Mz0,
+        }
+    }
+
+    /// TYDEX name of the channel (`FYW`, `FX`, `MZW`).
+    pub fn tydex_name(self) -> &'static str {
+        match self {
+            MapChannel::FyPure => "FYW",
+            MapChannel::FxPure => "FX",
+            MapChannel::MzPure => "MZW",
+        }
+    }
+
+    /// The stages whose coefficients the channel depends on (their covariances, block-diagonal).
+    pub fn stages(self) -> &'static [&'static str] {
+        match self {
+            MapChannel::FyPure => &["fy_pure"],
+            MapChannel::FxPure => &["fx_pure"],
+            MapChannel::MzPure => &["fy_pure", "mz_pure"],
+        }
+    }
+
+    /// The stage whose residual RMSE stands for the noise of a new measurement.
+    pub fn residual_stage(self) -> &'static str {
+        match self {
+            MapChannel::FyPure => "fy_pure",
+            MapChannel::FxPure => "fx_pure",
+            MapChannel::MzPure => "mz_pure",
+        }
+    }
+}
+
+/// One channel's map over the grid.
+#[derive(Debug, Clone, PartialEq)]
+pub struct PredictionMap {
+    /// The channel.
+    pub channel: MapChannel,
+    /// Model value at each grid point ([`EnvelopeGrid::inputs`] order).
+    pub value: Vec<f64>,
+    /// 1σ of the model's prediction (delta method); NaN where a stage it depends on is not fitted.
+    pub std: Vec<f64>,
+    /// The residual RMSE of the channel's stage (NaN before it is fitted).
+    pub residual_rmse: f64,
+}
+
+/// The parameter covariance one channel's predictions depend on.
+#[derive(Debug, Clone)]
+pub struct ChannelCovariance {
+    keys: Vec<&'static str>,
+    /// Row-major, block-diagonal over the stages.
+    cov: Vec<f64>,
+    residual_rmse: f64,
+}
+
+impl ChannelCovariance {
+    /// The covariance of `channel`'s coefficients in `result`; `None` while a stage it depends on
+    /// has not been fitted (or its covariance could not be computed).
+    pub fn of(result: &FitResult, channel: MapChannel) -> Option<Self> {
+        let mut blocks = Vec::new();
+        for name in channel.stages() {
+            let rep = result.stages.iter().find(|s| s.stage == *name && s.skipped.is_none())?;
+            let n = rep.primary_keys.len();
+            if n == 0 || rep.covariance.len() != n * n {
+                return None;
+            }
+            blocks.push((rep.primary_keys.clone(), rep.covariance.clone()));
+        }
+        let total: usize = blocks.iter().map(|b| b.0.len()).sum();
+        let mut keys = Vec::with_capacity(total);
+        let mut cov = vec![0.0; total * total];
+        let mut at = 0;
+        for (k, c) in blocks {
+            let n = k.len();
+            for i in 0..n {
+                for j in 0..n {
+                    cov[(at + i) * total + at + j] = c[i * n + j];
+                }
+            }
+            keys.extend(k);
+            at += n;
+        }
+        let residual_rmse =
+            result.stages.iter().find(|s| s.stage == channel.residual_stage()).map_or(f64::NAN, |s| s.rmse);
+        Some(ChannelCovariance { keys, cov, residual_rmse })
+    }
+
+    /// The residual RMSE of the channel's stage.
+    pub fn residual_rmse(&self) -> f64 {
+        self.residual_rmse
+    }
+
+    /// 1σ of `channel`'s model prediction at `input` for the fitted `params` (delta method).
+    pub fn std_at(&self, result: &FitResult, channel: MapChannel, input: &MfInput) -> f64 {
+        let ch = channel.channel();
+        let base = values_of(&result.params, &self.keys);
+        let mut p = result.params.clone();
+        let n = self.keys.len();
+        let mut g = vec![0.0; n];
+        for (i, key) in self.keys.iter().enumerate() {
+            let h = 1e-6 * base[i].abs().max(1e-3);
+            let _ = p.set(key, base[i] + h);
+            let up = ch.eval(&p, input);
+            let _ = p.set(key, base[i] - h);
+            let down = ch.eval(&p, input);
+            let _ = p.set(key, base[i]);
+            g[i] = (up - down) / (2.0 * h);
+        }
+        let mut var = 0.0;
+        for a in 0..n {
+            if g[a] == 0.0 {
+                continue;
+            }
+            for b in 0..n {
+                if g[b] != 0.0 {
+                    var += g[a] * self.cov[a * n + b] * g[b];
+                }
+            }
+        }
+        var.max(0.0).sqrt()
+    }
+}
+
+/// Every channel's map over `grid` for the fit `result`.
+pub fn prediction_maps(result: &FitResult, grid: &EnvelopeGrid) -> Vec<PredictionMap> {
+    MapChannel::ALL
+        .iter()
+        .map(|&channel| {
+            let inputs = grid.inputs(channel, result.nominal.r0_m);
+            let ch = channel.channel();
+            let value: Vec<f64> = inputs.iter().map(|x| ch.eval(&result.params, x)).collect();
+            let (std, residual_rmse) = match ChannelCovariance::of(result, channel) {
+                Some(c) => (inputs.iter().map(|x| c.std_at(result, channel, x)).collect(), c.residual_rmse()),
+                None => (vec![f64::NAN; inputs.len()], f64::NAN),
+            };
+            PredictionMap { channel, value, std, residual_rmse }
+        })
+        .collect()
+}
+
+/// How often the predicted 95 % bands hold what they claim, for one channel, on points the
+/// fit never saw ([`coverage`]).
+#[derive(Debug, Clone, PartialEq, serde::Serialize)]
+pub struct Coverage {
+    /// The channel (`FYW`, `FX`, `MZW`).
+    pub channel: String,
+    /// Held-out points scored.
+    pub points: usize,
+    /// % of measured values inside ±1.96·√(σ_model² + RMSE²) (the band for a new measurement).
+    pub measured_in_band_pct: f64,
+    /// % of the reference model's values inside ±1.96·σ_model (the band of the mean), when a
+    /// reference (the virtual rig's true tyre) is given.
+    pub truth_in_band_pct: Option<f64>,
+    /// Median σ_model over the points, channel units.
+    pub median_std: f64,
+    /// The residual RMSE used.
+    pub residual_rmse: f64,
+}
+
+/// Scores the predicted bands of `result` on `other` (data the fit never saw, e.g. a repeat
+/// run): per mapped channel, the same selection of points its stage makes from `other`.
+pub fn coverage(
+    result: &FitResult,
+    other: &crate::Dataset,
+    opts: &crate::FitOptions,
+    truth: Option<&mftyre::TyreParams>,
+) -> Vec<Coverage> {
+    use crate::stages::{Ctx, STAGES};
+    let ctx = Ctx {
+        data: other,
+        opts,
+        nominal: result.nominal.clone(),
+        settings: crate::fit::StepSettings::default(),
+        grid: crate::physics::Grid::of_range(&result.params, &result.range),
+    };
+    let mut out = Vec::new();
+    for channel in MapChannel::ALL {
+        let Some(cov) = ChannelCovariance::of(result, channel) else { continue };
+        let Some(stage) = STAGES.iter().find(|s| s.name() == channel.residual_stage()) else { continue };
+        let Some(sel) = stage.select(&ctx) else { continue };
+        let ch = channel.channel();
+        let (mut n, mut inside, mut truth_inside) = (0usize, 0usize, 0usize);
+        let mut stds = Vec::with_capacity(sel.len());
+        for p in &sel.points {
+            let y = ch.eval(&result.params, &p.input);
+            let sd = cov.std_at(result, channel, &p.input);
+            if !(y.is_finite() && sd.is_finite()) {
+                continue;
+            }
+            n += 1;
+            stds.push(sd);
+            let band = 1.96 * (sd * sd + cov.residual_rmse * cov.residual_rmse).sqrt();
+            if (p.measured - y).abs() <= band {
+                inside += 1;
+            }
+            if let Some(t) = truth
+                && (ch.eval(t, &p.input) - y).abs() <= 1.96 * sd
+            {
+                truth_inside += 1;
+            }
+        }
+        if n == 0 {
+            continue;
+        }
+        let pct = |k: usize| 100.0 * k as f64 / n as f64;
+        out.push(Coverage {
+            channel: channel.tydex_name().into(),
+            points: n,
+            measured_in_band_pct: pct(inside),
+            truth_in_band_pct: truth.map(|_| pct(truth_inside)),
+            median_std: crate::starts::median(stds).unwrap_or(f64::NAN),
+            residual_rmse: cov.residual_rmse,
+        });
+    }
+    out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn standard_grid_has_the_documented_size_and_order() {
+        let g = EnvelopeGrid::standard(4000.0, 2.0e5, 16.0);
+        assert_eq!(g.len(), 4 * 11 * 5 * 3);
+        let x = g.inputs(MapChannel::FxPure, 0.3);
+        assert_eq!(x.len(), g.len());
+        // pressure fastest, then camber, slip, load
+        assert_eq!(x[0].p_pa, 0.85 * 2.0e5);
+        assert_eq!(x[1].p_pa, 2.0e5);
+        assert_eq!(x[3].gamma_rad, (-2.0f64).to_radians());
+        assert_eq!(x[15].kappa, -0.1);
+        assert_eq!(x[165].fz_n, 4000.0);
+        let y = g.inputs(MapChannel::FyPure, 0.3);
+        assert_eq!(y[0].alpha_rad, (-12.0f64).to_radians());
+        assert_eq!(y[0].kappa, 0.0);
+    }
+}
