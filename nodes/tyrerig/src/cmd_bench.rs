@@ -150,7 +150,8 @@ pub fn run(cmd: BenchCmd) -> anyhow::Result<()> {
     let (cfg, _keystore) = bench_config(secure)?;
     let security = if secure { "secured" } else { "plain" };
     match cmd {
-        BenchCmd::LiveFit(_) => unreachable!("handled before the DDS set-up"),
+        // Returned above, before the DDS set-up it does not need.
+        BenchCmd::LiveFit(args) => crate::bench_livefit::run(&args),
         BenchCmd::Foxglove { clients, rate_hz, seconds, port } => {
             rt.block_on(crate::bench_foxglove::run(clients, rate_hz, seconds, port))
         }
