@@ -24,6 +24,7 @@ TOPICS = {
     "/rig/channels/sweep_summary": "tyre_msgs/msg/SweepSummary",
     "/rig/channels/derived": "tyre_msgs/msg/DerivedMeasurement",
     "/rig/quality/report": "tyre_msgs/msg/QualityReport",
+    "/rig/model/state": "tyre_msgs/msg/ModelState",
     "/diagnostics": "diagnostic_msgs/msg/DiagnosticArray",
     "/clock": "rosgraph_msgs/msg/Clock",
 }
