@@ -219,16 +219,7 @@ pub fn cross_validate(
     sigma: [f64; 4],
     opt: FitOptions,
 ) -> Vec<[f64; 4]> {
-    let mut out = vec![[f64::NAN; 4]; ev.ds.len()];
-    for (fi, test) in folds.iter().enumerate() {
-        let train: Vec<usize> =
-            folds.iter().enumerate().filter(|(j, _)| *j != fi).flat_map(|(_, v)| v.iter().copied()).collect();
-        let (fitted, _) = fit_effects(ev, specs, &train, meas, sigma, opt);
-        for (k, p) in test.iter().zip(ev.predict(&fitted, test)) {
-            out[*k] = p;
-        }
-    }
-    out
+    cross_validate_with(ev, specs, folds, meas, sigma, opt, None)
 }
 
 /// Cross-validated predictions against the form error ([`crate::form`]): for each held-out
@@ -243,16 +234,39 @@ pub fn cross_validate_corrected(
     opt: FitOptions,
     correction: &[crate::form::FoldCorrection],
 ) -> Vec<[f64; 4]> {
+    cross_validate_with(ev, specs, folds, meas, sigma, opt, Some(correction))
+}
+
+fn cross_validate_with(
+    ev: &Evaluator<'_>,
+    specs: &[FitSpec],
+    folds: &[Vec<usize>],
+    meas: &[[f64; 4]],
+    sigma: [f64; 4],
+    opt: FitOptions,
+    correction: Option<&[crate::form::FoldCorrection]>,
+) -> Vec<[f64; 4]> {
     let mut out = vec![[f64::NAN; 4]; ev.ds.len()];
     for (fi, test) in folds.iter().enumerate() {
-        let Some(corr) = correction.get(fi) else { continue };
+        let corr = match correction {
+            Some(c) => match c.get(fi) {
+                Some(f) => Some(f),
+                None => continue,
+            },
+            None => None,
+        };
         let train: Vec<usize> =
             folds.iter().enumerate().filter(|(j, _)| *j != fi).flat_map(|(_, v)| v.iter().copied()).collect();
-        let target: Vec<[f64; 4]> =
-            meas.iter().zip(corr).map(|(m, c)| std::array::from_fn(|ch| m[ch] - c[ch])).collect();
+        let target: Vec<[f64; 4]> = match corr {
+            Some(c) => meas.iter().zip(c).map(|(m, c)| std::array::from_fn(|ch| m[ch] - c[ch])).collect(),
+            None => meas.to_vec(),
+        };
         let (fitted, _) = fit_effects(ev, specs, &train, &target, sigma, opt);
         for (k, p) in test.iter().zip(ev.predict(&fitted, test)) {
-            out[*k] = std::array::from_fn(|ch| p[ch] + corr[*k][ch]);
+            out[*k] = match corr {
+                Some(c) => std::array::from_fn(|ch| p[ch] + c[*k][ch]),
+                None => p,
+            };
         }
     }
     out
