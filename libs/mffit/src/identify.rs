@@ -153,6 +153,10 @@ pub enum Dim {
     Speed,
 }
 
+/// The most levels of one variable any coefficient [`need`]s: beyond it, more levels free no
+/// further coefficient.
+pub const MOST_LEVELS_NEEDED: usize = 3;
+
 /// How many distinct levels of which variables a coefficient needs to be identifiable, from the
 /// MF-Tyre 6.1 equations: e.g. PDY2 multiplies dfz (2 loads), PEX3 multiplies dfz² (3 loads),
 /// PKY4 shapes Kyα(Fz) beyond its slope (3 loads), PPY4 multiplies dpi² (3 pressures).
@@ -451,6 +455,18 @@ fn serial_inflation(res: &[f64], groups: &[usize]) -> f64 {
 
 #[cfg(test)]
 mod tests {
+
+    #[test]
+    fn no_coefficient_needs_more_than_the_most_levels_needed() {
+        for group in mftyre::CoefGroup::ALL {
+            for key in group.keys() {
+                for (_, n) in need(key) {
+                    assert!(*n <= MOST_LEVELS_NEEDED, "{key} needs {n} levels");
+                }
+            }
+        }
+    }
+
     use super::*;
 
     #[test]

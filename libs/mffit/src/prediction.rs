@@ -222,17 +222,23 @@ impl ChannelCovariance {
 
     /// 1σ of `channel`'s model prediction at `input` for the fitted `params` (delta method).
     pub fn std_at(&self, result: &FitResult, channel: MapChannel, input: &MfInput) -> f64 {
-        let ch = channel.channel();
         let base = values_of(&result.params, &self.keys);
-        let mut p = result.params.clone();
+        let mut scratch = result.params.clone();
+        self.std_with(&mut scratch, &base, channel, input)
+    }
+
+    /// [`ChannelCovariance::std_at`] on a scratch copy of the fitted parameters (`base`: the
+    /// fitted values of the covariance's keys), left as it was found: no copy per point.
+    fn std_with(&self, p: &mut mftyre::TyreParams, base: &[f64], channel: MapChannel, input: &MfInput) -> f64 {
+        let ch = channel.channel();
         let n = self.keys.len();
         let mut g = vec![0.0; n];
         for (i, key) in self.keys.iter().enumerate() {
             let h = 1e-6 * base[i].abs().max(1e-3);
             let _ = p.set(key, base[i] + h);
-            let up = ch.eval(&p, input);
+            let up = ch.eval(p, input);
             let _ = p.set(key, base[i] - h);
-            let down = ch.eval(&p, input);
+            let down = ch.eval(p, input);
             let _ = p.set(key, base[i]);
             g[i] = (up - down) / (2.0 * h);
         }
@@ -249,21 +255,71 @@ impl ChannelCovariance {
         }
         var.max(0.0).sqrt()
     }
+
+    /// σ at every input, on `threads` threads (each point is 2 model runs per key: the maps are
+    /// the live fit's second biggest cost after the stages).
+    fn stds(&self, result: &FitResult, channel: MapChannel, inputs: &[MfInput], threads: usize) -> Vec<f64> {
+        let base = values_of(&result.params, &self.keys);
+        let mut out = vec![0.0; inputs.len()];
+        let chunk = inputs.len().div_ceil(threads.max(1)).max(1);
+        std::thread::scope(|s| {
+            for (o, x) in out.chunks_mut(chunk).zip(inputs.chunks(chunk)) {
+                let base = &base;
+                s.spawn(move || {
+                    let mut scratch = result.params.clone();
+                    for (o, x) in o.iter_mut().zip(x) {
+                        *o = self.std_with(&mut scratch, base, channel, x);
+                    }
+                });
+            }
+        });
+        out
+    }
+
+    /// True when `other` is the same covariance of the same keys at the same fitted values.
+    fn same_as(&self, other: &ChannelCovariance, result: &FitResult, other_result: &FitResult) -> bool {
+        self.keys == other.keys
+            && self.cov == other.cov
+            && self.residual_rmse.to_bits() == other.residual_rmse.to_bits()
+            && values_of(&result.params, &self.keys) == values_of(&other_result.params, &other.keys)
+    }
 }
 
 /// Every channel's map over `grid` for the fit `result`.
 pub fn prediction_maps(result: &FitResult, grid: &EnvelopeGrid) -> Vec<PredictionMap> {
+    prediction_maps_since(result, grid, None, 1)
+}
+
+/// [`prediction_maps`] on `threads` threads, taking over a channel's σ from the maps of a
+/// `previous` fit (with its maps) where nothing the σ depends on changed: the same keys, values
+/// and covariance, and the same model values at every grid point. A live update after a sweep
+/// that moved no stage of a channel (a slip-ratio sweep for FY) then costs 660 model runs for
+/// that channel instead of 660 × 2 × keys.
+pub fn prediction_maps_since(
+    result: &FitResult,
+    grid: &EnvelopeGrid,
+    previous: Option<(&FitResult, &[PredictionMap])>,
+    threads: usize,
+) -> Vec<PredictionMap> {
     MapChannel::ALL
         .iter()
         .map(|&channel| {
             let inputs = grid.inputs(channel, result.nominal.r0_m);
             let ch = channel.channel();
             let value: Vec<f64> = inputs.iter().map(|x| ch.eval(&result.params, x)).collect();
-            let (std, residual_rmse) = match ChannelCovariance::of(result, channel) {
-                Some(c) => (inputs.iter().map(|x| c.std_at(result, channel, x)).collect(), c.residual_rmse()),
-                None => (vec![f64::NAN; inputs.len()], f64::NAN),
+            let Some(c) = ChannelCovariance::of(result, channel) else {
+                return PredictionMap { channel, value, std: vec![f64::NAN; inputs.len()], residual_rmse: f64::NAN };
             };
-            PredictionMap { channel, value, std, residual_rmse }
+            let unchanged = previous.and_then(|(prev, maps)| {
+                let m = maps.iter().find(|m| m.channel == channel)?;
+                let pc = ChannelCovariance::of(prev, channel)?;
+                let same = c.same_as(&pc, result, prev)
+                    && m.value.len() == value.len()
+                    && m.value.iter().zip(&value).all(|(a, b)| a.to_bits() == b.to_bits());
+                same.then(|| m.std.clone())
+            });
+            let std = unchanged.unwrap_or_else(|| c.stds(result, channel, &inputs, threads));
+            PredictionMap { channel, value, std, residual_rmse: c.residual_rmse() }
         })
         .collect()
 }

@@ -2,9 +2,10 @@
 //! completed data segment, a [`ModelState`] per update.
 
 use std::collections::VecDeque;
+use std::sync::Arc;
 
 use mffit::logs::Segmenter;
-use mffit::prediction::{EnvelopeGrid, prediction_maps};
+use mffit::prediction::{EnvelopeGrid, PredictionMap, prediction_maps_since};
 use mffit::{DataKind, Dataset, FitResult, Segment, WarmStart};
 use tyre_msgs::builtin_interfaces::Time;
 use tyre_msgs::{ModelState, ProcedureState, RigSample};
@@ -40,7 +41,11 @@ pub struct LiveFit {
     new_segments: usize,
     last_segment: String,
     stamp: Time,
-    previous: Option<FitResult>,
+    previous: Option<Arc<FitResult>>,
+    /// The uncertainty maps of `previous`.
+    maps: Vec<PredictionMap>,
+    /// The warm start of the last update (it remembers the levels every update has seen).
+    warm: Option<WarmStart>,
     grid: Option<EnvelopeGrid>,
     updates: u32,
     completed: bool,
@@ -61,6 +66,8 @@ impl LiveFit {
             last_segment: String::new(),
             stamp: Time::default(),
             previous: None,
+            maps: Vec::new(),
+            warm: None,
             grid: None,
             updates: 0,
             completed: false,
@@ -124,7 +131,7 @@ impl LiveFit {
 
     /// The latest successful fit.
     pub fn latest(&self) -> Option<&FitResult> {
-        self.previous.as_ref()
+        self.previous.as_deref()
     }
 
     /// Refits on all data so far, warm-started from the previous update, and returns the model
@@ -140,8 +147,10 @@ impl LiveFit {
         self.new_segments = 0;
         self.updates += 1;
         let mut opts = self.cfg.update_options(false);
-        opts.warm_start = self.previous.as_ref().map(WarmStart::of);
+        opts.warm_start = self.previous.as_deref().map(|r| WarmStart::of(r).remembering(self.warm.as_ref()));
+        self.warm = opts.warm_start.clone();
         UpdateJob {
+            previous: self.previous.clone().map(|r| (r, self.maps.clone())),
             data: self.data.clone(),
             opts,
             grid: self.grid.clone(),
@@ -158,15 +167,17 @@ impl LiveFit {
     pub fn end_update(&mut self, done: UpdateDone) -> ModelState {
         let error = match done.result {
             Ok(result) => {
-                self.previous = Some(result);
+                self.previous = Some(Arc::new(result));
+                self.maps = done.maps;
                 String::new()
             }
+            // The previous model and its maps stand.
             Err(e) => e,
         };
         if self.grid.is_none() {
             self.grid = done.grid.clone();
         }
-        let mut st = model_state(self.previous.as_ref(), self.grid.as_ref(), &done.maps);
+        let mut st = model_state(self.previous.as_deref(), self.grid.as_ref(), &self.maps);
         st.header.stamp = done.stamp;
         st.header.frame_id = "iso_w".into();
         st.update_index = done.index;
@@ -215,6 +226,8 @@ impl LiveFit {
 /// another thread.
 #[derive(Debug)]
 pub struct UpdateJob {
+    /// The previous fit and its maps: the maps of channels it left unchanged are taken over.
+    previous: Option<(Arc<FitResult>, Vec<PredictionMap>)>,
     data: Dataset,
     opts: mffit::FitOptions,
     grid: Option<EnvelopeGrid>,
@@ -259,7 +272,8 @@ impl UpdateJob {
             let n = &r.nominal;
             let g =
                 grid.get_or_insert_with(|| EnvelopeGrid::standard(n.fz0_n, self.p0_pa.unwrap_or(n.p0_pa), n.v0_mps));
-            maps = prediction_maps(r, g);
+            let previous = self.previous.as_ref().map(|(p, m)| (p.as_ref(), m.as_slice()));
+            maps = prediction_maps_since(r, g, previous, self.opts.threads);
             wall_s = r.wall_s;
         }
         let segs = &self.data.segments;
@@ -289,6 +303,20 @@ fn score(r: &FitResult, other: &FitResult) -> f64 {
         .sum()
 }
 
+/// The stage where two fits of the same data differ most, in words.
+fn widest_gap(warm: &FitResult, fresh: &FitResult) -> String {
+    let nrmse = |r: &FitResult, stage: &str| {
+        r.stages.iter().find(|s| s.stage == stage && r.fitted(stage)).map(|s| s.nrmse_pct())
+    };
+    warm.stages
+        .iter()
+        .filter(|s| s.stage != "relaxation")
+        .filter_map(|s| Some((s.stage.as_str(), nrmse(warm, &s.stage)?, nrmse(fresh, &s.stage)?)))
+        .filter(|(_, w, c)| w.is_finite() && c.is_finite())
+        .max_by(|a, b| (a.1 - a.2).abs().total_cmp(&(b.1 - b.2).abs()))
+        .map_or("no stage fitted by both".into(), |(s, w, c)| format!("widest gap {s}: {w:.3} % vs {c:.3} %"))
+}
+
 /// The final model: the warm-started one, or a fresh fit of all data (as `tyrerig fit` makes it)
 /// when that fits the data better. Warm starts carry the path the data took: a coefficient set
 /// found on the first sweeps can sit in a local minimum that a fresh start avoids. Which one was
@@ -305,8 +333,9 @@ fn polish(
             let (sw, sc) = (score(&w, &c), score(&c, &w));
             let keep_warm = sw <= sc;
             let note = format!(
-                "final model: {} (sum of stage NRMSE: warm-started {sw:.3} %, fresh fit {sc:.3} %)",
-                if keep_warm { "warm-started" } else { "fresh fit" }
+                "final model: {} (sum of stage NRMSE: warm-started {sw:.3} %, fresh fit {sc:.3} %; {})",
+                if keep_warm { "warm-started" } else { "fresh fit" },
+                widest_gap(&w, &c)
             );
             let both_s = w.wall_s + c.wall_s;
             let mut kept = if keep_warm { w } else { c };

@@ -69,18 +69,34 @@ pub fn run(args: &LiveFitBench) -> anyhow::Result<()> {
                 let state = core.update();
                 let wall_s = t.elapsed().as_secs_f64();
                 if args.verbose {
+                    // A stage refitted from the data's start (new operating levels) is marked.
+                    let cold = |stage: &str| {
+                        core.latest()
+                            .and_then(|r| r.stages.iter().find(|r| r.stage == stage))
+                            .and_then(|r| r.notes.iter().find(|n| n.ends_with(mffit::stages::COLD_START_NOTE)))
+                    };
                     let stages: Vec<String> = state
                         .stages
                         .iter()
                         .filter(|s| s.wall_s > 0.05)
-                        .map(|s| format!("{} {:.2}s/{}it", s.stage, s.wall_s, s.iterations))
+                        .map(|s| {
+                            let mark = cold(&s.stage).map_or(String::new(), |why| format!(" ({why})"));
+                            format!("{} {:.2}s/{}it{mark}", s.stage, s.wall_s, s.iterations)
+                        })
+                        .collect();
+                    let nrmse: Vec<String> = state
+                        .stages
+                        .iter()
+                        .filter(|s| s.nrmse_pct.is_finite())
+                        .map(|s| format!("{} {:.2}", s.stage, s.nrmse_pct))
                         .collect();
                     eprintln!(
-                        "update {:>3} at {:>6.0} s, {:>3} segments: {wall_s:.3} s  {}",
+                        "update {:>3} at {:>6.0} s, {:>3} segments: {wall_s:.3} s  {}\n    NRMSE %: {}",
                         state.update_index,
                         state.header.stamp.as_secs_f64(),
                         state.segments_used,
-                        stages.join(", ")
+                        stages.join(", "),
+                        nrmse.join(", ")
                     );
                 }
                 updates.push(Update { wall_s, state });

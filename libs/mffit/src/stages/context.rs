@@ -129,6 +129,15 @@ impl Ctx<'_> {
         self.opts.warm_start.as_ref().filter(|w| w.stages.iter().any(|(s, _)| s == stage)).map(|w| &w.params)
     }
 
+    /// The keys the warm start's solution held by the Jacobian's verdict in `stage` (empty when
+    /// the stage starts cold).
+    pub fn warm_held(&self, stage: &str) -> &[crate::identify::Held] {
+        match (self.warm(stage), self.opts.warm_start.as_ref()) {
+            (Some(_), Some(w)) => w.jacobian_held(stage),
+            _ => &[],
+        }
+    }
+
     /// True when a stage stuck above its noise floor may try other starts
     /// ([`FitOptions::restarts`]).
     pub fn restarts(&self) -> bool {

@@ -78,6 +78,16 @@ pub struct FitOptions {
     pub warm_start: Option<WarmStart>,
 }
 
+/// How the note of a stage a warm-started fit refitted from the data's start ends.
+pub const COLD_START_NOTE: &str = "fitted from the data's start, not warm";
+
+/// A warm-started stage ending above this multiple of its previous NRMSE (plus
+/// [`WARM_WORSENING_PCT`]) is fitted afresh: a new sweep moves a converged NRMSE by a few
+/// percent of itself, a warm start stuck in a poor region by several times.
+const WARM_WORSENING: f64 = 1.5;
+/// The NRMSE (percentage points) a warm-started stage may gain besides [`WARM_WORSENING`].
+const WARM_WORSENING_PCT: f64 = 0.25;
+
 /// A previous solution a fit starts from ([`FitOptions::warm_start`]).
 ///
 /// A stage starts warm when the previous fit fitted it and its data still hold the same
@@ -99,6 +109,10 @@ pub struct WarmStart {
     /// The previous fit's nominal values (LONGVL, NOMPRES, FNOMIN, UNLOADED_RADIUS): reuse needs
     /// them unchanged.
     nominal: [f64; 4],
+    /// Per stage, the keys the previous solution's Jacobian could not identify.
+    jacobian_held: Vec<(String, Vec<Held>)>,
+    /// Per stage, the NRMSE (%) of its latest fit from the data's start.
+    fresh_nrmse_pct: Vec<(String, f64)>,
 }
 
 impl WarmStart {
@@ -120,8 +134,34 @@ impl WarmStart {
                 Some((r.clone(), signature(&d.points), values))
             })
             .collect();
+        let jacobian_held = result
+            .stages
+            .iter()
+            .map(|r| {
+                let held = r.held.iter().filter(|h| h.reason.ends_with(steps::JACOBIAN_HELD)).cloned().collect();
+                (r.stage.clone(), held)
+            })
+            .collect();
+        let fresh_nrmse_pct = result
+            .stages
+            .iter()
+            .filter(|r| r.started_fresh && result.fitted(&r.stage))
+            .map(|r| (r.stage.clone(), r.nrmse_pct()))
+            .collect();
         let n = &result.nominal;
-        WarmStart { params: result.params.clone(), stages, reuse, nominal: [n.v0_mps, n.p0_pa, n.fz0_n, n.r0_m] }
+        WarmStart {
+            params: result.params.clone(),
+            stages,
+            reuse,
+            nominal: [n.v0_mps, n.p0_pa, n.fz0_n, n.r0_m],
+            jacobian_held,
+            fresh_nrmse_pct,
+        }
+    }
+
+    /// The keys the previous solution's Jacobian held in `stage`.
+    fn jacobian_held(&self, stage: &str) -> &[Held] {
+        self.jacobian_held.iter().find(|(s, _)| s == stage).map_or(&[], |(_, h)| h.as_slice())
     }
 
     /// The previous report and values of `stage` when its points had `sig`.
@@ -129,9 +169,50 @@ impl WarmStart {
         self.reuse.iter().find(|(r, s, _)| r.stage == stage && *s == sig)
     }
 
-    /// True when `stage` may start warm on points with `levels`.
+    /// This warm start, remembering the most levels of each stage that `older` (the warm start
+    /// of the update before) had seen: a level count that flickers as data accumulate (a level
+    /// near the point threshold of [`Levels`], decimation choosing other points) then frees
+    /// nothing new and does not send the stage back to a fresh fit at every update.
+    pub fn remembering(mut self, older: Option<&WarmStart>) -> Self {
+        for (stage, v) in older.map_or(&[][..], |o| o.fresh_nrmse_pct.as_slice()) {
+            if !self.fresh_nrmse_pct.iter().any(|(s, _)| s == stage) {
+                self.fresh_nrmse_pct.push((stage.clone(), *v));
+            }
+        }
+        for (stage, seen) in older.map_or(&[][..], |o| o.stages.as_slice()) {
+            if let Some((_, now)) = self.stages.iter_mut().find(|(s, _)| s == stage) {
+                for (n, o) in now.iter_mut().zip(seen) {
+                    *n = (*n).max(*o);
+                }
+            }
+        }
+        self
+    }
+
+    /// True when `stage` may start warm on points with `levels`: the previous solutions fitted
+    /// it and had seen at least as many levels of each kind, counted up to the most any
+    /// coefficient needs (a load that varies within sweeps counts more levels as points
+    /// accumulate, and a fourth or a sixteenth level frees nothing).
     fn admits(&self, stage: &str, levels: &Levels) -> bool {
-        self.stages.iter().any(|(s, n)| s == stage && *n == level_counts(levels))
+        let now = level_counts(levels).map(|n| n.min(crate::identify::MOST_LEVELS_NEEDED));
+        self.stages.iter().any(|(s, seen)| s == stage && now.iter().zip(seen).all(|(n, m)| n <= m))
+    }
+
+    /// The NRMSE (%) a warm start of `stage` is held to: what its latest fit from the data's
+    /// start reached (warm updates that each lose a little add up to a stuck solution that no
+    /// single update shows), else the previous solution's.
+    fn reference_nrmse_pct(&self, stage: &str) -> Option<f64> {
+        self.fresh_nrmse_pct
+            .iter()
+            .find(|(s, _)| s == stage)
+            .map(|(_, v)| *v)
+            .or_else(|| self.reuse.iter().find(|(r, _, _)| r.stage == stage).map(|(r, _, _)| r.nrmse_pct()))
+            .filter(|v| v.is_finite())
+    }
+
+    /// The most levels (loads, pressures, cambers, speeds) the previous solutions of `stage` saw.
+    fn levels_seen(&self, stage: &str) -> Option<[usize; 4]> {
+        self.stages.iter().find(|(s, _)| s == stage).map(|(_, n)| *n)
     }
 }
 
@@ -201,6 +282,9 @@ pub struct StageReport {
     pub wall_s: f64,
     /// Findings: skipped steps, restarts, fallbacks.
     pub notes: Vec<String>,
+    /// True when the stage was fitted from the data's start (not warm-started).
+    #[serde(skip)]
+    pub started_fresh: bool,
     /// Why the stage was skipped, if it was.
     pub skipped: Option<String>,
     /// Candidate keys the data identify (fitted by some step).
@@ -242,6 +326,7 @@ impl StageReport {
             termination: String::new(),
             wall_s: 0.0,
             notes: Vec::new(),
+            started_fresh: false,
             skipped: None,
             free: Vec::new(),
             primary_keys: Vec::new(),
@@ -422,22 +507,51 @@ pub fn fit(data: &Dataset, opts: &FitOptions) -> Result<FitResult, FitError> {
             continue;
         }
         unchanged_so_far = false;
-        // Warm only where the previous solution saw the same levels (else fitted as in a fresh fit).
-        let warm = opts
-            .warm_start
-            .as_ref()
-            .is_some_and(|w| w.admits(stage.name(), &Levels::of(&selection.points, ctx.nominal.fz0_n)));
-        let cold_opts;
-        let cold_ctx;
-        let stage_ctx = if warm || opts.warm_start.is_none() {
-            &ctx
-        } else {
-            cold_opts = FitOptions { warm_start: None, ..opts.clone() };
-            cold_ctx = Ctx { data, opts: &cold_opts, nominal: nominal.clone(), settings, grid: ctx.grid.clone() };
-            rep.notes.push("new operating levels in the data: fitted from the data's start, not warm".into());
-            &cold_ctx
+        // Warm only where the previous solutions saw as many levels (else fitted as in a fresh fit).
+        let levels = Levels::of(&selection.points, ctx.nominal.fz0_n);
+        let warm = opts.warm_start.as_ref().is_some_and(|w| w.admits(stage.name(), &levels));
+        let cold_opts = opts.warm_start.as_ref().map(|_| FitOptions { warm_start: None, ..opts.clone() });
+        let cold_ctx = cold_opts.as_ref().map(|o| Ctx {
+            data,
+            opts: o,
+            nominal: nominal.clone(),
+            settings,
+            grid: ctx.grid.clone(),
+        });
+        let stage_ctx = match (&cold_ctx, warm) {
+            (Some(cold), false) => {
+                let seen = opts.warm_start.as_ref().and_then(|w| w.levels_seen(stage.name()));
+                rep.notes.push(format!(
+                    "new operating levels in the data (loads, pressures, cambers, speeds: {:?}, before at most {}): \
+                     {COLD_START_NOTE}",
+                    level_counts(&levels),
+                    seen.map_or("none fitted".into(), |n| format!("{n:?}"))
+                ));
+                cold
+            }
+            _ => &ctx,
         };
-        match stage.fit(stage_ctx, &mut params, &selection, &mut rep) {
+        let before = params.clone();
+        let mut outcome = stage.fit(stage_ctx, &mut params, &selection, &mut rep);
+        // A warm start that ends far above where the previous solution was (upstream stages
+        // moved, or the new sweep sits where the old solution extrapolates badly and the
+        // update's few iterations cannot get out): fitted afresh, as a fresh fit would.
+        let previous = opts.warm_start.as_ref().and_then(|w| w.reference_nrmse_pct(stage.name()));
+        if let (true, Ok(()), Some(cold), Some(prev)) = (warm, &outcome, &cold_ctx, previous)
+            && rep.nrmse_pct() > WARM_WORSENING * prev + WARM_WORSENING_PCT
+        {
+            let note = format!(
+                "the warm start ended at {:.2} % NRMSE, the last fit from the data's start at {prev:.2} %: {COLD_START_NOTE}",
+                rep.nrmse_pct()
+            );
+            params = before;
+            rep = StageReport::new(stage.name(), stage.channel().name());
+            rep.peak = context::peak_abs(&selection.points);
+            rep.notes.push(note);
+            outcome = stage.fit(cold, &mut params, &selection, &mut rep);
+        }
+        rep.started_fresh = !warm || rep.notes.iter().any(|n| n.ends_with(COLD_START_NOTE));
+        match outcome {
             Ok(()) => {
                 if !selection.is_empty() {
                     stage_data.push(StageData {
@@ -525,4 +639,40 @@ fn set_limits(params: &mut TyreParams, r: &ValidRange, n: &Nominal) {
 /// Values of `keys` as `(key, value)` pairs (for reports and tests).
 pub fn key_values(params: &TyreParams, keys: &[&'static str]) -> Vec<(&'static str, f64)> {
     keys.iter().copied().zip(values_of(params, keys)).collect()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn warm(stages: &[(&str, [usize; 4])], fresh: &[(&str, f64)]) -> WarmStart {
+        WarmStart {
+            params: TyreParams::from_tir_str(TEMPLATE_TIR, "template").expect("the template parses"),
+            stages: stages.iter().map(|(s, n)| (s.to_string(), *n)).collect(),
+            reuse: Vec::new(),
+            nominal: [0.0; 4],
+            jacobian_held: Vec::new(),
+            fresh_nrmse_pct: fresh.iter().map(|(s, v)| (s.to_string(), *v)).collect(),
+        }
+    }
+
+    fn levels(n: [usize; 4]) -> Levels {
+        let v = |k: usize| (0..k).map(|i| i as f64).collect();
+        Levels { loads_n: v(n[0]), pressures_pa: v(n[1]), cambers_rad: v(n[2]), speeds_mps: v(n[3]) }
+    }
+
+    #[test]
+    fn a_warm_start_admits_flickering_levels_but_not_a_level_that_frees_a_coefficient() {
+        let older = warm(&[("fy_pure", [7, 2, 1, 1])], &[("fy_pure", 0.8)]);
+        // The newer solution saw fewer loads (decimation, a level under the point threshold).
+        let w = warm(&[("fy_pure", [5, 2, 1, 1])], &[]).remembering(Some(&older));
+        assert!(w.admits("fy_pure", &levels([6, 2, 1, 1])));
+        assert!(w.admits("fy_pure", &levels([16, 2, 1, 1])), "a 16th load frees nothing");
+        assert!(!w.admits("fy_pure", &levels([5, 3, 1, 1])), "a third pressure frees PPY4");
+        assert!(!w.admits("fy_pure", &levels([5, 2, 2, 1])), "a second camber frees the camber terms");
+        assert!(!w.admits("mz_pure", &levels([1, 1, 1, 1])), "a stage never fitted starts fresh");
+        // The reference a warm start is held to is the latest fresh fit's, remembered.
+        assert_eq!(w.reference_nrmse_pct("fy_pure"), Some(0.8));
+        assert_eq!(w.reference_nrmse_pct("mz_pure"), None);
+    }
 }

@@ -122,6 +122,11 @@ impl Stage for Radius {
         if long.len() > 20 {
             steps.push(("longitudinal force", LONGITUDINAL.to_vec(), long.points.clone()));
         }
+        // A warm start runs only the last step; this stage's steps free disjoint keys on
+        // disjoint points, so its last step is all of them on all of the points.
+        if ctx.warm(self.name()).is_some() {
+            steps = vec![("all keys", candidates.clone(), judged.points.clone())];
+        }
         run_steps(ctx, params, rep, Channel::Rl, rr, &steps, None)?;
         finish(ctx, params, &start, rep, Channel::Rl, data, None)?;
         // Effective rolling radius from the free-rolling wheel speed: Re = Vx/Ω.
