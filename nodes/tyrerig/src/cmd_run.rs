@@ -5,6 +5,10 @@ use procedure::SweepStyle;
 use std::path::PathBuf;
 use suite::{Headless, McapSink, ProcedureChoice, RunSpec};
 
+/// Wall time the rig waits after discovering its readers before the first sample on a secured
+/// domain [s] (plain: the rig node's default, 2 s).
+const SECURED_START_DELAY_S: f64 = 5.0;
+
 /// `tyrerig run [--procedure …] [--rig-config …] [--tyre …] [--load-index N] [--effects …] [--seed N] [--sweeps …] --out <log.mcap>`
 #[derive(Debug, clap::Args)]
 pub struct RunArgs {
@@ -269,6 +273,12 @@ fn run_dds(args: &RunArgs) -> anyhow::Result<()> {
     rig.push(("wait_for_subscribers", V::Integer(if args.fit { 5 } else { 4 })));
     if let Some(m) = args.max_speed {
         rig.push(("max_time_scale", V::Float(m)));
+    }
+    // Secured participants go on exchanging crypto tokens after they have discovered each other;
+    // on a loaded 2-core machine a reader was still unable to decode for ~3 s after discovery and
+    // missed the first 34 samples with the plain 2 s start delay.
+    if args.keystore.is_some() {
+        rig.push(("start_delay_s", V::Float(SECURED_START_DELAY_S)));
     }
     let mut sequencer = vec![
         ("procedure", path_value(&spec.procedure_file)?),
