@@ -27,3 +27,19 @@ pub use config::AdaptiveConfig;
 pub use library::{Candidate, Library, Slot};
 pub use model::{FitView, ModelView, Target, TargetModel};
 pub use planner::{Decision, Planner, PlannerState};
+
+/// Serde for an `f64` that may be NaN ("not known"): JSON has no NaN and writes it as `null`,
+/// so `null` reads back as NaN (checkpoints and run summaries round-trip).
+pub mod nan_as_null {
+    use serde::{Deserialize, Deserializer, Serializer};
+
+    /// Writes NaN as `null`, anything else as the number.
+    pub fn serialize<S: Serializer>(v: &f64, s: S) -> Result<S::Ok, S::Error> {
+        if v.is_finite() { s.serialize_f64(*v) } else { s.serialize_none() }
+    }
+
+    /// Reads `null` as NaN.
+    pub fn deserialize<'de, D: Deserializer<'de>>(d: D) -> Result<f64, D::Error> {
+        Ok(Option::<f64>::deserialize(d)?.unwrap_or(f64::NAN))
+    }
+}

@@ -30,16 +30,22 @@ pub struct Decision {
     /// Its sweep name (empty when closing).
     pub name: String,
     /// Its predicted value: reduction of the mean squared predicted error, (% of peak)².
+    #[serde(with = "crate::nan_as_null")]
     pub value: f64,
     /// Its predicted cost \[s\].
+    #[serde(with = "crate::nan_as_null")]
     pub cost_s: f64,
     /// Predicted error over the slot's targets before it (% of peak, RMS over targets).
+    #[serde(with = "crate::nan_as_null")]
     pub error_pct: f64,
     /// Predicted error after it.
+    #[serde(with = "crate::nan_as_null")]
     pub error_after_pct: f64,
     /// Predicted error if every remaining candidate ran (the full procedure's content).
+    #[serde(with = "crate::nan_as_null")]
     pub full_error_pct: f64,
     /// The error the slot stops at.
+    #[serde(with = "crate::nan_as_null")]
     pub target_pct: f64,
     /// Why, in words.
     pub reason: String,

@@ -168,7 +168,7 @@ fn a_sweep_that_teaches_nothing_new_has_no_value_and_variance_never_grows() {
 }
 
 #[test]
-fn untested_pressures_are_worth_more_than_repeats_and_severe_sweeps_come_last() {
+fn severe_sweeps_come_last_and_the_slot_closes() {
     let cfg = AdaptiveConfig::default();
     let lib = gs2mf_library(&cfg);
     let view = Synth::new(0.01, 0.02);
@@ -261,9 +261,16 @@ fn a_target_without_a_model_is_bootstrapped_by_the_cheapest_sweep_that_measures_
     let mut view = Synth::new(0.01, 0.02);
     view.models.retain(|(t, _)| *t != Target::FxCombined && *t != Target::FyCombined);
     let from = start(&lib, 1);
-    let d = Planner::new(lib.clone(), cfg).evaluate(1, from, &view, 1.0);
+    let mut p = Planner::new(lib.clone(), cfg);
+    let d = p.decide(1, from, &view, 1.0);
     let c = &lib.candidates[d.candidate.unwrap()];
     assert_eq!(c.kind, CandidateKind::Combined);
     assert!(!c.severe);
     assert!(d.reason.contains("FX combined"), "{}", d.reason);
+    // Its predicted figures are unknown (NaN): the state still round-trips through JSON.
+    assert!(d.value.is_nan());
+    let json = serde_json::to_string(p.state()).unwrap();
+    let back: adaptive::PlannerState = serde_json::from_str(&json).unwrap();
+    assert_eq!(back.used, p.state().used);
+    assert!(back.decisions[0].value.is_nan() && back.decisions[0].name == d.name);
 }

@@ -291,6 +291,13 @@ pub struct AdaptiveCheckpoint {
     pub insertions: Vec<Insertion>,
     /// The planner's decisions.
     pub planner: PlannerState,
+    /// Observed thermal pauses so far and the pause model's estimate of the same pauses \[s\]:
+    /// their ratio scales the predicted cool-downs, so it must survive a resume too.
+    #[serde(default)]
+    pub pause_sum_s: f64,
+    /// See `pause_sum_s`.
+    #[serde(default)]
+    pub pause_model_sum_s: f64,
 }
 
 /// One inserted candidate.
@@ -521,9 +528,22 @@ impl Sequencer {
         let lib = a.planner.library().clone();
         a.planner = Planner::restore(lib, cfg.adaptive, cp.planner.clone())
             .map_err(|e| SequencerError::Adaptive(e.to_string()))?;
+        s.pause_sum_s = cp.pause_sum_s;
+        s.pause_model_sum_s = cp.pause_model_sum_s;
         s.check_checkpoint(checkpoint)?;
         s.position(checkpoint);
         Ok(s)
+    }
+
+    /// Where the plan has the rig when the sweeps of the slot before step `at` begin: the end of
+    /// step `at − 1` (its thermal-pause hold when a pause follows it). Decisions are taken from
+    /// here, not from the measured state, so a resumed run decides as the original did.
+    fn slot_from(&self, at: usize) -> Setpoint {
+        match at.checked_sub(1).and_then(|i| self.plan.steps.get(i)) {
+            Some(prev) if prev.thermal_pause_after => thermal_pause_setpoint(&prev.trajectory.end()),
+            Some(prev) => prev.trajectory.end(),
+            None => self.plan.steps[0].trajectory.start(),
+        }
     }
 
     /// The adaptive planner (its library and decisions), for an adaptive sequencer.
@@ -591,11 +611,12 @@ impl Sequencer {
             return out;
         };
         let scale = if self.pause_model_sum_s > 0.0 { self.pause_sum_s / self.pause_model_sum_s } else { 1.0 };
+        let from = self.slot_from(at);
         let Some(a) = self.adaptive.as_mut() else { return out };
-        let d = a.planner.decide(slot, sp, view, scale);
+        let d = a.planner.decide(slot, from, view, scale);
         match d.candidate {
             Some(id) => {
-                self.insert_candidate(slot, id, sp);
+                self.insert_candidate(slot, id, from);
                 out.events.push(SequencerEvent::SweepChosen {
                     slot,
                     name: d.name.clone(),
@@ -613,16 +634,20 @@ impl Sequencer {
             }
         }
         out.events.push(SequencerEvent::CheckpointChanged);
-        self.begin_at(now_s, at, false, &mut out);
+        // Ramp from the hold the sequencer commanded (in a run that did not stop, where the
+        // chosen group was built from): a measured sample differs in every axis by noise (its
+        // pressure alone would make the ramp a 20 s pressure change).
+        self.begin_at_from(now_s, at, false, Some(sp), &mut out);
         self.emit(now_s, &mut out, true);
         out
     }
 
     /// Hold `hold` until the adaptive plan decides what runs at step `at`.
-    fn await_plan(&mut self, at: usize, slot: usize, hold: Setpoint, out: &mut SequencerOutput) {
+    fn await_plan(&mut self, at: usize, slot: usize, hold: Setpoint) {
         self.cursor = at.saturating_sub(1).min(self.plan.steps.len() - 1);
         self.state = State::Running(Run::AwaitPlan { sp: hold, at, slot });
-        out.events.push(SequencerEvent::PlanNeeded { slot });
+        // `step` raises PlanNeeded on every call until the plan is decided (level, not edge:
+        // a START or RESUME that lands on a slot is answered at the next control tick).
     }
 
     /// Move on to step `next` (after a step or a thermal pause ended at `t0`; `hold` is where
@@ -631,7 +656,7 @@ impl Sequencer {
         if let Some(slot) = self.open_slot_at(next) {
             out.events.push(SequencerEvent::CheckpointChanged);
             self.last_setpoint = Some(hold);
-            self.await_plan(next, slot, hold, out);
+            self.await_plan(next, slot, hold);
         } else if next >= self.plan.steps.len() {
             self.last_setpoint = Some(hold);
             self.complete(now_s, out);
@@ -709,6 +734,8 @@ impl Sequencer {
                 fixed_fingerprint: a.fixed_fingerprint,
                 insertions: a.insertions.clone(),
                 planner: a.planner.state().clone(),
+                pause_sum_s: self.pause_sum_s,
+                pause_model_sum_s: self.pause_model_sum_s,
             }),
         }
     }
@@ -943,14 +970,27 @@ impl Sequencer {
     /// known (last sample or setpoint), ramp from it to where the plan expects the rig; a
     /// settle at `at` is folded into that ramp.
     fn begin_at(&mut self, now_s: f64, at: usize, pause_first: bool, out: &mut SequencerOutput) {
+        let from = self.last_sample.or(self.last_setpoint);
+        self.begin_at_from(now_s, at, pause_first, from, out);
+    }
+
+    /// [`Self::begin_at`] ramping from `from` (`None`: the rig's state is unknown).
+    fn begin_at_from(
+        &mut self,
+        now_s: f64,
+        at: usize,
+        pause_first: bool,
+        from: Option<Setpoint>,
+        out: &mut SequencerOutput,
+    ) {
         if !pause_first && let Some(slot) = self.open_slot_at(at) {
-            let from = self.last_sample.or(self.last_setpoint).unwrap_or_else(|| self.plan.steps[0].trajectory.start());
+            let from = from.unwrap_or_else(|| self.plan.steps[0].trajectory.start());
             let mut hold = self.clamp_to_envelope(from).zero_slip();
             if matches!(hold.mode, RigMode::Static | RigMode::Safe) {
                 hold.mode = RigMode::FreeRolling;
             }
             self.last_setpoint = Some(hold);
-            self.await_plan(at, slot, hold, out);
+            self.await_plan(at, slot, hold);
             return;
         }
         let steps = &self.plan.steps;
@@ -959,7 +999,6 @@ impl Sequencer {
             self.complete(now_s, out);
             return;
         }
-        let from = self.last_sample.or(self.last_setpoint);
         let (cursor, target, pause) = if pause_first && at > 0 {
             (at - 1, thermal_pause_setpoint(&steps[at - 1].trajectory.end()), true)
         } else if steps[at].kind == StepKind::Settle && at + 1 < n && from.is_some() {
@@ -1132,7 +1171,10 @@ impl Sequencer {
                         self.advance(t0 + d, now_s, self.cursor + 1, end, &mut out);
                     }
                 }
-                State::Running(Run::AwaitPlan { sp, .. }) => break Some(sp),
+                State::Running(Run::AwaitPlan { sp, slot, .. }) => {
+                    out.events.push(SequencerEvent::PlanNeeded { slot });
+                    break Some(sp);
+                }
                 State::Running(Run::ThermalPause { t0, sp }) => {
                     let Some(timed_out) = self.thermal_releases(now_s, t0, thermal) else {
                         break Some(sp);

@@ -70,17 +70,23 @@ pub struct RunSummary {
 #[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize)]
 pub struct AdaptiveChoice {
     /// Rig time of the decision [s].
+    #[serde(with = "adaptive::nan_as_null")]
     pub rig_time_s: f64,
     /// The slot.
     pub slot: usize,
     /// The chosen sweep; empty when the slot closed.
     pub sweep: String,
     /// Predicted value, (% of peak)², and cost [s].
+    #[serde(with = "adaptive::nan_as_null")]
     pub value: f64,
+    #[serde(with = "adaptive::nan_as_null")]
     pub cost_s: f64,
     /// Predicted error before and after it, and the slot's target, % of peak.
+    #[serde(with = "adaptive::nan_as_null")]
     pub error_pct: f64,
+    #[serde(with = "adaptive::nan_as_null")]
     pub error_after_pct: f64,
+    #[serde(with = "adaptive::nan_as_null")]
     pub target_pct: f64,
     /// Why.
     pub reason: String,
