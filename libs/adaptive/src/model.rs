@@ -275,7 +275,7 @@ fn build(result: &FitResult, t: Target, grid: &EnvelopeGrid, cfg: &AdaptiveConfi
     let inputs = grid_inputs(result, t, grid);
     let ch = t.channel();
     let scale = inputs.iter().map(|x| ch.eval(&result.params, x).abs()).filter(|v| v.is_finite()).fold(0.0, f64::max);
-    if !(scale > 0.0) {
+    if scale <= 0.0 {
         return None;
     }
     let rows: Vec<DVector<f64>> = inputs.iter().map(|x| gradient(result, ch, &keys, x) / scale).collect();

@@ -112,7 +112,7 @@ fn drive(seq: &mut Sequencer, mut t: f64, max_decisions: usize) -> (f64, Vec<Seq
             if decisions == max_decisions {
                 return (t, events);
             }
-            assert_eq!(seq.awaiting_plan().is_some(), true);
+            assert!(seq.awaiting_plan().is_some());
             let out = seq.plan_next(t, &view);
             decisions += 1;
             take(&out, t, &mut pause_since, &mut events);

@@ -129,7 +129,10 @@ fn fit_prefix(data: &Dataset, n: usize) -> anyhow::Result<FitResult> {
     mffit::fit(&d, &opts).map_err(|e| anyhow::anyhow!("fit of {n} segments: {e}"))
 }
 
-fn truth_fn(tyre: &VirtualTyre) -> Box<dyn Fn(UseMode, &MfInput) -> MfOutput + '_> {
+/// The rig's true tyre as a function of the operating point.
+type Truth<'a> = Box<dyn Fn(UseMode, &MfInput) -> MfOutput + 'a>;
+
+fn truth_fn(tyre: &VirtualTyre) -> Truth<'_> {
     match (tyre.mf_params(), tyre.brush_params()) {
         (Some(p), _) => Box::new(move |mode, x| mftyre::evaluate(p, mode, x)),
         (None, Some(b)) => Box::new(move |_, x| {
