@@ -116,6 +116,10 @@ fn drive(seq: &mut Sequencer, mut t: f64, max_decisions: usize) -> (f64, Vec<Seq
             let out = seq.plan_next(t, &view);
             decisions += 1;
             take(&out, t, &mut pause_since, &mut events);
+            // A slot at the plan's end: closing it completes the run.
+            if out.events.iter().any(|e| matches!(e, SequencerEvent::Completed { .. })) {
+                return (t, events);
+            }
         }
     }
     panic!("the adaptive plan did not complete in 40,000 s of rig time");

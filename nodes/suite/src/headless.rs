@@ -386,8 +386,9 @@ impl Headless {
             let mut done = false;
             if out.events.iter().any(|e| matches!(e, SequencerEvent::PlanNeeded { .. })) {
                 // The adaptive plan decides with the live model as it is now: the update after
-                // the previous sweep ran in this loop when that sweep's segment closed.
-                self.plan_next(t, sink, &mut sum)?;
+                // the previous sweep ran in this loop when that sweep's segment closed. Closing
+                // a slot at the plan's end completes the run.
+                done = self.plan_next(t, sink, &mut sum)?;
             }
             for ev in &out.events {
                 sum.on_event(ev);

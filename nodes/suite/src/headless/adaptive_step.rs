@@ -13,13 +13,14 @@ use tyre_msgs::std_msgs::Header;
 
 impl Headless {
     /// Asks the sequencer's planner for the next sweep with the live fit's latest model (none
-    /// yet: every target unknown) and publishes what came of it.
+    /// yet: every target unknown) and publishes what came of it. True when that completed the
+    /// procedure (the last slot closed at the plan's end).
     pub(super) fn plan_next(
         &mut self,
         t: f64,
         sink: &mut dyn MessageSink,
         sum: &mut SummaryBuilder,
-    ) -> Result<(), HeadlessError> {
+    ) -> Result<bool, HeadlessError> {
         let cfg = *self.seq.planner().map(|p| p.config()).ok_or_else(|| {
             HeadlessError::Sequencer("a slot of the adaptive plan without an adaptive planner".into())
         })?;
@@ -36,13 +37,15 @@ impl Headless {
             sum.on_state(st);
             sink.put(t, Outgoing::Procedure(st))?;
         }
+        let mut completed = false;
         for ev in &out.events {
             sum.on_event(ev);
+            completed |= matches!(ev, SequencerEvent::Completed { .. });
             if let Some(d) = decision_status(ev, t) {
                 sink.put(t, Outgoing::Diagnostics(&d))?;
             }
         }
-        Ok(())
+        Ok(completed)
     }
 }
 
