@@ -198,14 +198,24 @@ pub fn run(args: &AdaptiveBench) -> anyhow::Result<()> {
                     .collect();
                 cuts.dedup();
                 let mut curve = Vec::new();
+                let mut final_rows: Vec<AccuracyRow> = Vec::new();
                 for &c in &cuts {
-                    let e = if plan.label == "gs2mf" && c == n {
-                        e_ref
+                    let rows = if plan.label == "gs2mf" && c == n {
+                        score(&reference)
                     } else {
-                        fit_prefix(&data, c).map(|f| mean_error(&score(&f))).unwrap_or(f64::INFINITY)
+                        fit_prefix(&data, c).map(|f| score(&f)).unwrap_or_default()
                     };
+                    let e = if rows.is_empty() { f64::INFINITY } else { mean_error(&rows) };
                     curve.push((ends[c - 1], c, e));
+                    final_rows = rows;
                 }
+                let per_channel: Vec<String> =
+                    final_rows.iter().map(|r| format!("{} {:.2}", r.channel, r.rms_pct_of_peak)).collect();
+                eprintln!(
+                    "  {tyre_label} seed {seed} {}: final model per channel (% of peak): {}",
+                    plan.label,
+                    per_channel.join(", ")
+                );
                 let reach =
                     |tol: f64| curve.iter().find(|(_, _, e)| *e <= e_ref * (1.0 + tol) + 1e-12).map(|(t, _, _)| *t);
                 let (t_acc, t_acc10) = (reach(0.0), reach(0.10));
@@ -235,6 +245,8 @@ pub fn run(args: &AdaptiveBench) -> anyhow::Result<()> {
                     "peak_tread_temp_c": summary.max_temp_c, "peak_sweep_start_temp_c": summary.max_sweep_start_temp_c,
                     "wear_mm_true": summary.wear_mm_true, "curve": curve.iter().map(|(t, c, e)| json!({"rig_time_s": t, "segments": c, "error_pct": e})).collect::<Vec<_>>(),
                     "adaptive_decisions": summary.adaptive.len(),
+                    "final_per_channel_pct": final_rows.iter().map(|r| json!({"channel": r.channel, "rms_pct_of_peak": r.rms_pct_of_peak})).collect::<Vec<_>>(),
+                    "alarms": summary.alarms.iter().filter(|a| a.check == "graph_sweep_drift").map(|a| a.message.clone()).collect::<Vec<_>>(),
                 }));
             }
             let g = times.iter().find(|t| t.0 == "gs2mf").and_then(|t| t.1);
