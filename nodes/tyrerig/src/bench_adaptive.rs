@@ -249,17 +249,19 @@ pub fn run(args: &AdaptiveBench) -> anyhow::Result<()> {
                     "alarms": summary.alarms.iter().filter(|a| a.check == "graph_sweep_drift").map(|a| a.message.clone()).collect::<Vec<_>>(),
                 }));
             }
-            let g = times.iter().find(|t| t.0 == "gs2mf").and_then(|t| t.1);
-            let a = times.iter().find(|t| t.0 == "adaptive");
-            if let (Some(g), Some((_, a0, a10))) = (g, a) {
-                println!(
-                    "{:<12} {:>4} adaptive / gs2mf rig time to accuracy: {} (to within 10 %: {})",
-                    tyre_label,
-                    seed,
-                    a0.map_or("not reached".into(), |a| format!("{:.3}", a / g)),
-                    a10.map_or("not reached".into(), |a| format!("{:.3}", a / g))
-                );
-            }
+            let g = times.iter().find(|t| t.0 == "gs2mf").map_or((None, None), |t| (t.1, t.2));
+            let a = times.iter().find(|t| t.0 == "adaptive").map_or((None, None), |t| (t.1, t.2));
+            let ratio = |a: Option<f64>, g: Option<f64>| match (a, g) {
+                (Some(a), Some(g)) => format!("{:.3}", a / g),
+                _ => "not reached".into(),
+            };
+            println!(
+                "{:<12} {:>4} adaptive / gs2mf rig time to accuracy: {} (to within 10 % of it: {})",
+                tyre_label,
+                seed,
+                ratio(a.0, g.0),
+                ratio(a.1, g.1)
+            );
         }
     }
     if let Some(p) = &args.json {
