@@ -45,22 +45,38 @@ pub struct AdaptiveBench {
     /// channels have no data in GS2MF, so no model reaches the target).
     #[arg(long, default_value_t = 0.5)]
     pub from: f64,
+    /// The adaptive plan's `target_ratio` (default: the sequencer's); a non-default one runs
+    /// as `adaptive-r<ratio>` with its own logs.
+    #[arg(long)]
+    pub target_ratio: Option<f64>,
+    /// Leave out the Square Matrix (its runs and fits take the longest).
+    #[arg(long)]
+    pub no_square_matrix: bool,
     /// Write every figure as JSON too.
     #[arg(long)]
     pub json: Option<PathBuf>,
 }
 
 struct Plan {
-    label: &'static str,
+    label: String,
     choice: ProcedureChoice,
     adaptive: bool,
 }
 
-const PLANS: [Plan; 3] = [
-    Plan { label: "gs2mf", choice: ProcedureChoice::Gs2mf, adaptive: false },
-    Plan { label: "adaptive", choice: ProcedureChoice::Gs2mf, adaptive: true },
-    Plan { label: "square-matrix", choice: ProcedureChoice::SquareMatrix, adaptive: false },
-];
+fn plans(args: &AdaptiveBench) -> Vec<Plan> {
+    let adaptive = match args.target_ratio {
+        Some(r) => format!("adaptive-r{r}"),
+        None => "adaptive".into(),
+    };
+    let mut p = vec![
+        Plan { label: "gs2mf".into(), choice: ProcedureChoice::Gs2mf, adaptive: false },
+        Plan { label: adaptive, choice: ProcedureChoice::Gs2mf, adaptive: true },
+    ];
+    if !args.no_square_matrix {
+        p.push(Plan { label: "square-matrix".into(), choice: ProcedureChoice::SquareMatrix, adaptive: false });
+    }
+    p
+}
 
 /// Runs (or reuses) one procedure's log; returns its summary.
 fn run_log(args: &AdaptiveBench, rig: &Path, seed: u64, plan: &Plan, log: &Path) -> anyhow::Result<RunSummary> {
@@ -74,10 +90,14 @@ fn run_log(args: &AdaptiveBench, rig: &Path, seed: u64, plan: &Plan, log: &Path)
     let mut spec = RunSpec::new(&args.launch_config, plan.choice);
     spec.rig_config = rig.to_owned();
     spec.seed = seed;
-    let seq_cfg = sequencer::SequencerConfig {
+    let mut seq_cfg = sequencer::SequencerConfig {
         plan: if plan.adaptive { sequencer::PlanKind::Adaptive } else { sequencer::PlanKind::Fixed },
         ..sequencer::SequencerConfig::default()
     };
+    if let Some(r) = args.target_ratio {
+        seq_cfg.adaptive.target_ratio = r;
+    }
+    seq_cfg.validate()?;
     let mut h = Headless::new(&spec, thermal::ThermalConfig::default(), seq_cfg)?;
     if plan.adaptive {
         h = h.with_live_fit(LiveFitConfig::default());
@@ -173,10 +193,10 @@ pub fn run(args: &AdaptiveBench) -> anyhow::Result<()> {
             let (_, tyre) = rig_and_tyre(&spec)?;
             let truth = truth_fn(&tyre);
             let mut logs = Vec::new();
-            for plan in &PLANS {
+            for plan in plans(args) {
                 let log = args.out_dir.join(format!("{tyre_label}_{}_s{seed}.mcap", plan.label));
                 let summary =
-                    run_log(args, rig, seed, plan, &log).with_context(|| format!("{} seed {seed}", plan.label))?;
+                    run_log(args, rig, seed, &plan, &log).with_context(|| format!("{} seed {seed}", plan.label))?;
                 logs.push((plan, log, summary));
             }
             // The reference: the full GS2MF run's model, and the grid every model is scored on.
@@ -236,7 +256,7 @@ pub fn run(args: &AdaptiveBench) -> anyhow::Result<()> {
                     summary.max_temp_c,
                     wear
                 );
-                times.push((plan.label, t_acc, t_acc10));
+                times.push((plan.adaptive, plan.label == "gs2mf", t_acc, t_acc10));
                 all.push(json!({
                     "tyre": tyre_label, "seed": seed, "plan": plan.label,
                     "rig_time_s": summary.total_rig_time_s, "sweeps": summary.sweeps,
@@ -249,8 +269,8 @@ pub fn run(args: &AdaptiveBench) -> anyhow::Result<()> {
                     "alarms": summary.alarms.iter().filter(|a| a.check == "graph_sweep_drift").map(|a| a.message.clone()).collect::<Vec<_>>(),
                 }));
             }
-            let g = times.iter().find(|t| t.0 == "gs2mf").map_or((None, None), |t| (t.1, t.2));
-            let a = times.iter().find(|t| t.0 == "adaptive").map_or((None, None), |t| (t.1, t.2));
+            let g = times.iter().find(|t| t.1).map_or((None, None), |t| (t.2, t.3));
+            let a = times.iter().find(|t| t.0).map_or((None, None), |t| (t.2, t.3));
             let ratio = |a: Option<f64>, g: Option<f64>| match (a, g) {
                 (Some(a), Some(g)) => format!("{:.3}", a / g),
                 _ => "not reached".into(),
