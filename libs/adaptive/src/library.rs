@@ -23,7 +23,7 @@ pub const FIXED_SECTIONS: [&str; 3] = ["warmup", "heating_sweep", "graph_sweep"]
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(rename_all = "snake_case")]
 pub enum CandidateKind {
-    /// Slip angle (or a load sweep at a held slip angle), free rolling.
+    /// Slip angle (or a load sweep at a held slip angle), free rolling: FY, MZ and MX.
     Lateral,
     /// Slip ratio at (close to) zero slip angle.
     Longitudinal,
@@ -35,7 +35,7 @@ impl CandidateKind {
     /// The targets its points inform.
     pub fn targets(self) -> &'static [Target] {
         match self {
-            CandidateKind::Lateral => &[Target::FyPure, Target::MzPure],
+            CandidateKind::Lateral => &[Target::FyPure, Target::MzPure, Target::MxPure],
             CandidateKind::Longitudinal => &[Target::FxPure],
             CandidateKind::Combined => &[Target::FxCombined, Target::FyCombined],
         }

@@ -27,6 +27,8 @@ pub enum Target {
     FyPure,
     /// Pure aligning moment over slip angle.
     MzPure,
+    /// Pure overturning moment over slip angle (camber and load make it).
+    MxPure,
     /// Pure longitudinal force over slip ratio.
     FxPure,
     /// Combined-slip FX (slip ratio at a held slip angle).
@@ -37,14 +39,15 @@ pub enum Target {
 
 impl Target {
     /// Every target.
-    pub const ALL: [Target; 5] =
-        [Target::FyPure, Target::MzPure, Target::FxPure, Target::FxCombined, Target::FyCombined];
+    pub const ALL: [Target; 6] =
+        [Target::FyPure, Target::MzPure, Target::MxPure, Target::FxPure, Target::FxCombined, Target::FyCombined];
 
     /// Name in logs and reports.
     pub fn name(self) -> &'static str {
         match self {
             Target::FyPure => "FY pure",
             Target::MzPure => "MZ pure",
+            Target::MxPure => "MX pure",
             Target::FxPure => "FX pure",
             Target::FxCombined => "FX combined",
             Target::FyCombined => "FY combined",
@@ -57,6 +60,7 @@ impl Target {
         match self {
             Target::FyPure => &["fy_pure"],
             Target::MzPure => &["fy_pure", "mz_pure"],
+            Target::MxPure => &["mx"],
             Target::FxPure => &["fx_pure"],
             Target::FxCombined => &["fx_pure", "fx_combined"],
             Target::FyCombined => &["fy_pure", "fy_combined"],
@@ -68,6 +72,7 @@ impl Target {
         match self {
             Target::FyPure => "fy_pure",
             Target::MzPure => "mz_pure",
+            Target::MxPure => "mx",
             Target::FxPure => "fx_pure",
             Target::FxCombined => "fx_combined",
             Target::FyCombined => "fy_combined",
@@ -78,6 +83,7 @@ impl Target {
         match self {
             Target::FyPure => Channel::Fy0,
             Target::MzPure => Channel::Mz0,
+            Target::MxPure => Channel::Mx,
             Target::FxPure => Channel::Fx0,
             Target::FxCombined => Channel::Fx,
             Target::FyCombined => Channel::Fy,
@@ -206,7 +212,7 @@ fn grid_inputs(result: &FitResult, t: Target, grid: &EnvelopeGrid) -> Vec<MfInpu
     let r0 = result.nominal.r0_m;
     match t {
         Target::FyPure => grid.inputs(MapChannel::FyPure, r0),
-        Target::MzPure => grid.inputs(MapChannel::MzPure, r0),
+        Target::MzPure | Target::MxPure => grid.inputs(MapChannel::MzPure, r0),
         Target::FxPure => grid.inputs(MapChannel::FxPure, r0),
         Target::FxCombined | Target::FyCombined => {
             let p0 = result.nominal.p0_pa;

@@ -148,8 +148,8 @@ fn a_sweep_that_teaches_nothing_new_has_no_value_and_variance_never_grows() {
     let mut lib = gs2mf_library(&cfg);
     lib.slots[0].candidates.truncate(6);
     let mut view = Synth::new(0.01, 0.02);
-    // FY and MZ flat: nothing a lateral sweep measures depends on the parameters.
-    view.flat = vec![Target::FyPure, Target::MzPure];
+    // FY, MZ and MX flat: nothing a lateral sweep measures depends on the parameters.
+    view.flat = vec![Target::FyPure, Target::MzPure, Target::MxPure];
     let p = Planner::new(lib.clone(), cfg);
     let d = p.evaluate(0, start(&lib, 0), &view, 1.0);
     assert!(d.candidate.is_none(), "{d:?}");
