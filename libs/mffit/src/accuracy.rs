@@ -78,6 +78,16 @@ fn lin(lo: f64, hi: f64, n: usize, i: usize) -> f64 {
 /// includes combinations never tested, e.g. high camber at high slip). The grid points lie
 /// between the tested conditions, not on them, hence "held out".
 pub fn compare(truth: &TyreParams, fitted: &TyreParams, range: &ValidRange, support: &Support) -> Vec<AccuracyRow> {
+    compare_with(&|mode, x| mftyre::evaluate(truth, mode, x), fitted, range, support)
+}
+
+/// [`compare`] against any reference tyre given as a function (a brush tyre, a measured map).
+pub fn compare_with(
+    truth: &dyn Fn(UseMode, &MfInput) -> mftyre::MfOutput,
+    fitted: &TyreParams,
+    range: &ValidRange,
+    support: &Support,
+) -> Vec<AccuracyRow> {
     let shrink = |r: crate::data::Range| {
         let w = r.max - r.min;
         (r.min + 0.05 * w, r.max - 0.05 * w)
@@ -165,7 +175,7 @@ pub fn compare(truth: &TyreParams, fitted: &TyreParams, range: &ValidRange, supp
         let mut peak: f64 = 0.0;
         let mut maxe: f64 = 0.0;
         for inp in grid.iter() {
-            let a = get(&mftyre::evaluate(truth, mode, inp));
+            let a = get(&truth(mode, inp));
             let b = get(&mftyre::evaluate(fitted, mode, inp));
             let e = b - a;
             se += e * e;

@@ -1,5 +1,6 @@
 //! The sequencer's typed configuration (TOML, `deny_unknown_fields`, [`SequencerConfig::validate`]).
 
+use adaptive::AdaptiveConfig;
 use procedure::{PauseModel, RigLimits};
 use serde::{Deserialize, Serialize};
 
@@ -30,6 +31,33 @@ pub struct SequencerConfig {
     /// When the silent rig's samples come back, rerun the interrupted sweep's group at once
     /// (else wait for an operator RESUME).
     pub resume_after_rig_silence: bool,
+    /// Which plan runs: the procedure as written, or adaptive (`docs/adaptive-plan.md`).
+    pub plan: PlanKind,
+    /// How the adaptive plan chooses and stops (used with `plan = "adaptive"`).
+    pub adaptive: AdaptiveConfig,
+}
+
+/// Which plan the sequencer runs.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum PlanKind {
+    /// Every step of the procedure, in order.
+    #[default]
+    Fixed,
+    /// The procedure's fixed parts; its other sweeps chosen one at a time by the live model's
+    /// predicted variance reduction per rig second, until the model is predicted good enough.
+    Adaptive,
+}
+
+impl std::str::FromStr for PlanKind {
+    type Err = String;
+    fn from_str(s: &str) -> Result<Self, String> {
+        match s {
+            "fixed" => Ok(Self::Fixed),
+            "adaptive" => Ok(Self::Adaptive),
+            other => Err(format!("expected `fixed` or `adaptive`, got `{other}`")),
+        }
+    }
 }
 
 impl Default for SequencerConfig {
@@ -44,6 +72,8 @@ impl Default for SequencerConfig {
             thermal_alarm_after_s: 0.5,
             estop_on_rig_silence: false,
             resume_after_rig_silence: true,
+            plan: PlanKind::Fixed,
+            adaptive: AdaptiveConfig::default(),
         }
     }
 }
@@ -91,6 +121,9 @@ impl SequencerConfig {
                 return Err(ConfigError { key, message: format!("expected a number ≥ 0, got {v}") });
             }
         }
+        self.adaptive
+            .validate()
+            .map_err(|(key, message)| ConfigError { key: "adaptive", message: format!("`{key}`: {message}") })?;
         self.envelope.validate().map_err(|message| ConfigError { key: "envelope", message })
     }
 }
@@ -115,5 +148,9 @@ mod tests {
         assert_eq!(e.key, "state_period_s");
         let e = SequencerConfig::from_toml("[envelope]\nmax_fz_n = -1.0\n").unwrap_err();
         assert_eq!(e.key, "envelope");
+        let e = SequencerConfig::from_toml("plan = \"adaptive\"\n[adaptive]\ntarget_ratio = 0.5\n").unwrap_err();
+        assert!(e.key == "adaptive" && e.message.contains("target_ratio"), "{e}");
+        let c = SequencerConfig::from_toml("plan = \"adaptive\"\n").unwrap();
+        assert_eq!(c.plan, PlanKind::Adaptive);
     }
 }

@@ -7,7 +7,9 @@
 //! a half-run sweep's data are useless. ABORT and ESTOP put the rig in its safe state (ESTOP at
 //! once, in the command's own output); START afterwards resumes from the checkpoint.
 
-use crate::config::SequencerConfig;
+use crate::config::{PlanKind, SequencerConfig};
+use adaptive::model::ModelView;
+use adaptive::{Library, Planner, PlannerState};
 use procedure::plan::PlanEnvelopeError;
 use procedure::primitives::thermal_pause_setpoint;
 use procedure::setpoint::{EnvelopeViolation, PA_PER_BAR};
@@ -57,6 +59,10 @@ pub enum SequencerError {
     /// The plan is empty.
     #[error("the plan has no steps")]
     EmptyPlan,
+    /// The adaptive plan cannot be made from this procedure, or a checkpoint's adaptive part
+    /// does not fit it.
+    #[error("adaptive plan: {0}")]
+    Adaptive(String),
     /// The checkpoint belongs to another plan.
     #[error(
         "checkpoint is for `{checkpoint_procedure}` (fingerprint {checkpoint_fingerprint:016x}), \
@@ -197,6 +203,42 @@ pub enum SequencerEvent {
     },
     /// Fresh `ThermalState`s again after [`SequencerEvent::ThermalLost`].
     ThermalBack,
+    /// The adaptive plan reached a slot: the caller must call [`Sequencer::plan_next`] with the
+    /// live model (the rig holds at zero slip until then).
+    PlanNeeded {
+        /// The slot.
+        slot: usize,
+    },
+    /// The adaptive plan chose the next sweep, and why.
+    SweepChosen {
+        /// The slot.
+        slot: usize,
+        /// The sweep's name.
+        name: String,
+        /// Predicted reduction of the mean squared predicted error, (% of peak)².
+        value: f64,
+        /// Predicted rig time to the end of its cool-down \[s\].
+        cost_s: f64,
+        /// Predicted error before it, % of peak.
+        error_pct: f64,
+        /// Predicted error after it, % of peak.
+        error_after_pct: f64,
+        /// The slot's stop target, % of peak.
+        target_pct: f64,
+        /// Why, in words.
+        reason: String,
+    },
+    /// The adaptive plan closed a slot (the plan goes on with its fixed steps).
+    SlotClosed {
+        /// The slot.
+        slot: usize,
+        /// Sweeps it ran.
+        sweeps: usize,
+        /// Predicted error at the close, % of peak.
+        error_pct: f64,
+        /// Why, in words.
+        reason: String,
+    },
     /// The rig reports it refused a setpoint (`RigSample.FAULT_ENVELOPE`, rising edge): its
     /// envelope is tighter than the sequencer's configured one. The run goes on; the data of
     /// the present step are suspect.
@@ -234,6 +276,49 @@ pub struct Checkpoint {
     pub elapsed_rig_time_s: f64,
     /// The whole plan is done.
     pub complete: bool,
+    /// The adaptive plan's decisions so far (`plan = "adaptive"`), so a resumed run rebuilds the
+    /// same plan and continues the same decisions.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub adaptive: Option<AdaptiveCheckpoint>,
+}
+
+/// The adaptive part of a [`Checkpoint`].
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct AdaptiveCheckpoint {
+    /// Fingerprint of the fixed plan (the procedure without its candidates).
+    pub fixed_fingerprint: u64,
+    /// Every candidate inserted, in order, with where the rig was (its group is built from it).
+    pub insertions: Vec<Insertion>,
+    /// The planner's decisions.
+    pub planner: PlannerState,
+    /// Observed thermal pauses so far and the pause model's estimate of the same pauses \[s\]:
+    /// their ratio scales the predicted cool-downs, so it must survive a resume too.
+    #[serde(default)]
+    pub pause_sum_s: f64,
+    /// See `pause_sum_s`.
+    #[serde(default)]
+    pub pause_model_sum_s: f64,
+}
+
+/// One inserted candidate.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct Insertion {
+    /// The slot.
+    pub slot: usize,
+    /// The candidate id.
+    pub candidate: usize,
+    /// The rig's setpoint its group starts from.
+    pub from: Setpoint,
+}
+
+/// The adaptive plan's state inside the sequencer.
+#[derive(Debug, Clone)]
+struct AdaptiveRun {
+    planner: Planner,
+    /// Index in the running plan of the step each slot's sweeps go before.
+    slot_at: Vec<usize>,
+    insertions: Vec<Insertion>,
+    fixed_fingerprint: u64,
 }
 
 /// Where inside a running plan we are.
@@ -246,6 +331,8 @@ enum Run {
     Step { t0: f64 },
     /// Waiting on the thermal gate after step `cursor`.
     ThermalPause { t0: f64, sp: Setpoint },
+    /// Holding `sp` until the adaptive plan decides what runs at step `at` (slot `slot`).
+    AwaitPlan { sp: Setpoint, at: usize, slot: usize },
 }
 
 #[derive(Debug, Clone, PartialEq)]
@@ -299,6 +386,8 @@ pub struct Sequencer {
     thermal_lost: bool,
     /// Rig time of the last fresh `ThermalState`.
     thermal_fresh_at: Option<f64>,
+    /// The adaptive plan (`plan = "adaptive"`).
+    adaptive: Option<AdaptiveRun>,
 }
 
 fn phase_of_kind(kind: StepKind) -> u8 {
@@ -370,12 +459,224 @@ impl Sequencer {
             fault_hold: false,
             thermal_lost: false,
             thermal_fresh_at: None,
+            adaptive: None,
         })
+    }
+
+    /// The sequencer `cfg.plan` asks for: [`Sequencer::new`] or [`Sequencer::new_adaptive`].
+    pub fn for_config(plan: Plan, cfg: SequencerConfig) -> Result<Self, SequencerError> {
+        match cfg.plan {
+            PlanKind::Fixed => Self::new(plan, cfg),
+            PlanKind::Adaptive => Self::new_adaptive(plan, cfg),
+        }
+    }
+
+    /// [`Sequencer::resume`] or [`Sequencer::resume_adaptive`], as `cfg.plan` asks.
+    pub fn resume_for_config(plan: Plan, cfg: SequencerConfig, cp: &Checkpoint) -> Result<Self, SequencerError> {
+        match cfg.plan {
+            PlanKind::Fixed => Self::resume(plan, cfg, cp),
+            PlanKind::Adaptive => Self::resume_adaptive(plan, cfg, cp),
+        }
+    }
+
+    /// An adaptive sequencer (`docs/adaptive-plan.md`): `plan` (the expanded procedure) is cut
+    /// into its fixed steps and a candidate library ([`adaptive::Library`]); the fixed steps run
+    /// in order, and at each slot the sequencer raises [`SequencerEvent::PlanNeeded`] and holds
+    /// until [`Sequencer::plan_next`] decides. Every candidate is checked against the envelope
+    /// here, so no chosen sweep can leave it.
+    pub fn new_adaptive(plan: Plan, cfg: SequencerConfig) -> Result<Self, SequencerError> {
+        cfg.validate()?;
+        plan.check_envelope(&cfg.envelope)?;
+        let lib = Library::from_plan(&plan, &cfg.pause_model, &cfg.envelope, &cfg.adaptive)
+            .map_err(|e| SequencerError::Adaptive(e.to_string()))?;
+        let mut s = Self::new(lib.fixed.clone(), cfg)?;
+        s.adaptive = Some(AdaptiveRun {
+            slot_at: lib.slots.iter().map(|x| x.at).collect(),
+            insertions: Vec::new(),
+            fixed_fingerprint: lib.fixed.fingerprint(),
+            planner: Planner::new(lib, cfg.adaptive),
+        });
+        Ok(s)
+    }
+
+    /// An adaptive sequencer continuing from `checkpoint`: the same insertions rebuild the same
+    /// plan, the planner continues from its decisions, the run restarts where it stopped.
+    pub fn resume_adaptive(plan: Plan, cfg: SequencerConfig, checkpoint: &Checkpoint) -> Result<Self, SequencerError> {
+        let mut s = Self::new_adaptive(plan, cfg)?;
+        let Some(cp) = checkpoint.adaptive.as_ref() else {
+            return Err(SequencerError::Adaptive("the checkpoint is not of an adaptive run".into()));
+        };
+        let a = s.adaptive.as_ref().expect("new_adaptive sets it");
+        if cp.fixed_fingerprint != a.fixed_fingerprint {
+            return Err(SequencerError::Adaptive(format!(
+                "the checkpoint's fixed plan ({:016x}) is not this procedure's ({:016x})",
+                cp.fixed_fingerprint, a.fixed_fingerprint
+            )));
+        }
+        let n_cand = a.planner.library().candidates.len();
+        let n_slot = a.slot_at.len();
+        for ins in &cp.insertions {
+            if ins.candidate >= n_cand || ins.slot >= n_slot {
+                return Err(SequencerError::Adaptive(format!(
+                    "checkpoint inserts candidate {} in slot {}: not in this library",
+                    ins.candidate, ins.slot
+                )));
+            }
+            s.insert_candidate(ins.slot, ins.candidate, ins.from);
+        }
+        let a = s.adaptive.as_mut().expect("new_adaptive sets it");
+        let lib = a.planner.library().clone();
+        a.planner = Planner::restore(lib, cfg.adaptive, cp.planner.clone())
+            .map_err(|e| SequencerError::Adaptive(e.to_string()))?;
+        s.pause_sum_s = cp.pause_sum_s;
+        s.pause_model_sum_s = cp.pause_model_sum_s;
+        s.check_checkpoint(checkpoint)?;
+        s.position(checkpoint);
+        Ok(s)
+    }
+
+    /// Where the plan has the rig when the sweeps of the slot before step `at` begin: the end of
+    /// step `at − 1` (its thermal-pause hold when a pause follows it). Decisions are taken from
+    /// here, not from the measured state, so a resumed run decides as the original did.
+    fn slot_from(&self, at: usize) -> Setpoint {
+        match at.checked_sub(1).and_then(|i| self.plan.steps.get(i)) {
+            Some(prev) if prev.thermal_pause_after => thermal_pause_setpoint(&prev.trajectory.end()),
+            Some(prev) => prev.trajectory.end(),
+            None => self.plan.steps[0].trajectory.start(),
+        }
+    }
+
+    /// The adaptive planner (its library and decisions), for an adaptive sequencer.
+    pub fn planner(&self) -> Option<&Planner> {
+        self.adaptive.as_ref().map(|a| &a.planner)
+    }
+
+    /// The slot waiting for [`Sequencer::plan_next`], if any.
+    pub fn awaiting_plan(&self) -> Option<usize> {
+        match &self.state {
+            State::Running(Run::AwaitPlan { slot, .. }) => Some(*slot),
+            _ => None,
+        }
+    }
+
+    /// The open slot whose sweeps go before step `i`.
+    fn open_slot_at(&self, i: usize) -> Option<usize> {
+        let a = self.adaptive.as_ref()?;
+        a.slot_at.iter().position(|&at| at == i).filter(|&slot| !a.planner.is_closed(slot))
+    }
+
+    /// Inserts candidate `id`'s group (built from `from`) before slot `slot`'s next step.
+    fn insert_candidate(&mut self, slot: usize, id: usize, from: Setpoint) {
+        let Some(a) = self.adaptive.as_mut() else { return };
+        let Some(cand) = a.planner.library().candidate(id) else { return };
+        let mut group = cand.group(from, &a.planner.library().limits);
+        let at = a.slot_at[slot];
+        let k = group.len();
+        for st in &mut self.plan.steps[at..] {
+            st.index += k;
+            if st.restart_from >= at {
+                st.restart_from += k;
+            }
+        }
+        for st in &mut group {
+            st.index += at;
+            st.restart_from += at;
+        }
+        let estimates: Vec<f64> = group.iter().map(|s| self.cfg.pause_model.pause_after_s(s)).collect();
+        self.plan.steps.splice(at..at, group);
+        self.pause_estimates_s.splice(at..at, estimates);
+        let mut data = 0u32;
+        for st in &mut self.plan.steps {
+            st.sweep_index = st.kind.is_data().then(|| {
+                data += 1;
+                data - 1
+            });
+        }
+        for s_at in &mut a.slot_at {
+            if *s_at >= at {
+                *s_at += k;
+            }
+        }
+        a.insertions.push(Insertion { slot, candidate: id, from });
+    }
+
+    /// The adaptive plan's decision at the slot it waits on, with the live model `view` (an
+    /// [`adaptive::FitView`] of the latest fit, or [`adaptive::model::NoModel`]): the chosen
+    /// sweep's group is inserted and runs at once, or the slot closes and the fixed plan goes
+    /// on. Does nothing unless [`Sequencer::awaiting_plan`].
+    pub fn plan_next(&mut self, now_s: f64, view: &dyn ModelView) -> SequencerOutput {
+        let mut out = SequencerOutput::default();
+        self.last_now_s = now_s;
+        let State::Running(Run::AwaitPlan { sp, at, slot }) = self.state.clone() else {
+            return out;
+        };
+        let scale = if self.pause_model_sum_s > 0.0 { self.pause_sum_s / self.pause_model_sum_s } else { 1.0 };
+        let from = self.slot_from(at);
+        let Some(a) = self.adaptive.as_mut() else { return out };
+        let d = a.planner.decide(slot, from, view, scale);
+        match d.candidate {
+            Some(id) => {
+                self.insert_candidate(slot, id, from);
+                out.events.push(SequencerEvent::SweepChosen {
+                    slot,
+                    name: d.name.clone(),
+                    value: d.value,
+                    cost_s: d.cost_s,
+                    error_pct: d.error_pct,
+                    error_after_pct: d.error_after_pct,
+                    target_pct: d.target_pct,
+                    reason: d.reason.clone(),
+                });
+            }
+            None => {
+                let sweeps = a.insertions.iter().filter(|i| i.slot == slot).count();
+                out.events.push(SequencerEvent::SlotClosed { slot, sweeps, error_pct: d.error_pct, reason: d.reason });
+            }
+        }
+        out.events.push(SequencerEvent::CheckpointChanged);
+        // Ramp from the hold the sequencer commanded (in a run that did not stop, where the
+        // chosen group was built from): a measured sample differs in every axis by noise (its
+        // pressure alone would make the ramp a 20 s pressure change).
+        self.begin_at_from(now_s, at, false, Some(sp), &mut out);
+        self.emit(now_s, &mut out, true);
+        out
+    }
+
+    /// Hold `hold` until the adaptive plan decides what runs at step `at`.
+    fn await_plan(&mut self, at: usize, slot: usize, hold: Setpoint) {
+        self.cursor = at.saturating_sub(1).min(self.plan.steps.len() - 1);
+        self.state = State::Running(Run::AwaitPlan { sp: hold, at, slot });
+        // `step` raises PlanNeeded on every call until the plan is decided (level, not edge:
+        // a START or RESUME that lands on a slot is answered at the next control tick).
+    }
+
+    /// Move on to step `next` (after a step or a thermal pause ended at `t0`; `hold` is where
+    /// the rig is): a slot's decision first if one is open there, else the step, else complete.
+    fn advance(&mut self, t0: f64, now_s: f64, next: usize, hold: Setpoint, out: &mut SequencerOutput) {
+        if let Some(slot) = self.open_slot_at(next) {
+            out.events.push(SequencerEvent::CheckpointChanged);
+            self.last_setpoint = Some(hold);
+            self.await_plan(next, slot, hold);
+        } else if next >= self.plan.steps.len() {
+            self.last_setpoint = Some(hold);
+            self.complete(now_s, out);
+        } else {
+            self.cursor = next;
+            self.enter_step(t0, out);
+        }
     }
 
     /// A sequencer that continues from `checkpoint`: idle, positioned at the interrupted
     /// group; START runs it without repeating completed steps.
     pub fn resume(plan: Plan, cfg: SequencerConfig, checkpoint: &Checkpoint) -> Result<Self, SequencerError> {
+        let mut s = Self::new(plan, cfg)?;
+        s.check_checkpoint(checkpoint)?;
+        s.position(checkpoint);
+        Ok(s)
+    }
+
+    fn check_checkpoint(&self, checkpoint: &Checkpoint) -> Result<(), SequencerError> {
+        let plan = &self.plan;
         if checkpoint.procedure != plan.procedure || checkpoint.plan_fingerprint != plan.fingerprint() {
             return Err(SequencerError::CheckpointMismatch {
                 checkpoint_procedure: checkpoint.procedure.clone(),
@@ -384,7 +685,12 @@ impl Sequencer {
                 plan_fingerprint: plan.fingerprint(),
             });
         }
-        let mut s = Self::new(plan, cfg)?;
+        Ok(())
+    }
+
+    /// Idle at the checkpoint's interrupted group.
+    fn position(&mut self, checkpoint: &Checkpoint) {
+        let s = self;
         let n = s.plan.steps.len();
         s.restart_at = checkpoint.next_step.min(n);
         s.cursor = s.restart_at.min(n - 1);
@@ -392,11 +698,10 @@ impl Sequencer {
         s.completed_steps = checkpoint.completed_steps.min(n);
         s.elapsed_before_s = checkpoint.elapsed_rig_time_s.max(0.0);
         s.resumed = true;
-        if checkpoint.complete || s.restart_at >= n {
+        if checkpoint.complete || (s.restart_at >= n && s.open_slot_at(n).is_none()) {
             s.state = State::Complete;
             s.frozen_elapsed_s = Some(s.elapsed_before_s);
         }
-        Ok(s)
     }
 
     /// Replace the envelope at run time (e.g. a rig interlock lowers the load limit): setpoints
@@ -425,6 +730,13 @@ impl Sequencer {
             completed_steps: self.completed_steps,
             elapsed_rig_time_s: self.elapsed_at(self.last_now_s),
             complete: self.state == State::Complete,
+            adaptive: self.adaptive.as_ref().map(|a| AdaptiveCheckpoint {
+                fixed_fingerprint: a.fixed_fingerprint,
+                insertions: a.insertions.clone(),
+                planner: a.planner.state().clone(),
+                pause_sum_s: self.pause_sum_s,
+                pause_model_sum_s: self.pause_model_sum_s,
+            }),
         }
     }
 
@@ -432,6 +744,7 @@ impl Sequencer {
     fn restart_point(&self, run: &Run) -> (usize, bool) {
         match run {
             Run::ThermalPause { .. } | Run::Transition { pause_after: true, .. } => (self.cursor + 1, true),
+            Run::AwaitPlan { at, .. } => (*at, false),
             Run::Transition { .. } | Run::Step { .. } => {
                 let step = &self.plan.steps[self.cursor];
                 (step.restart_from.min(self.cursor), false)
@@ -657,13 +970,35 @@ impl Sequencer {
     /// known (last sample or setpoint), ramp from it to where the plan expects the rig; a
     /// settle at `at` is folded into that ramp.
     fn begin_at(&mut self, now_s: f64, at: usize, pause_first: bool, out: &mut SequencerOutput) {
+        let from = self.last_sample.or(self.last_setpoint);
+        self.begin_at_from(now_s, at, pause_first, from, out);
+    }
+
+    /// [`Self::begin_at`] ramping from `from` (`None`: the rig's state is unknown).
+    fn begin_at_from(
+        &mut self,
+        now_s: f64,
+        at: usize,
+        pause_first: bool,
+        from: Option<Setpoint>,
+        out: &mut SequencerOutput,
+    ) {
+        if !pause_first && let Some(slot) = self.open_slot_at(at) {
+            let from = from.unwrap_or_else(|| self.plan.steps[0].trajectory.start());
+            let mut hold = self.clamp_to_envelope(from).zero_slip();
+            if matches!(hold.mode, RigMode::Static | RigMode::Safe) {
+                hold.mode = RigMode::FreeRolling;
+            }
+            self.last_setpoint = Some(hold);
+            self.await_plan(at, slot, hold);
+            return;
+        }
         let steps = &self.plan.steps;
         let n = steps.len();
         if at >= n {
             self.complete(now_s, out);
             return;
         }
-        let from = self.last_sample.or(self.last_setpoint);
         let (cursor, target, pause) = if pause_first && at > 0 {
             (at - 1, thermal_pause_setpoint(&steps[at - 1].trajectory.end()), true)
         } else if steps[at].kind == StepKind::Settle && at + 1 < n && from.is_some() {
@@ -832,13 +1167,13 @@ impl Sequencer {
                     out.events.push(SequencerEvent::CheckpointChanged);
                     if pause {
                         self.enter_pause(t0 + d, thermal_pause_setpoint(&end), &mut out);
-                    } else if self.cursor + 1 >= self.plan.steps.len() {
-                        self.last_setpoint = Some(end);
-                        self.complete(now_s, &mut out);
                     } else {
-                        self.cursor += 1;
-                        self.enter_step(t0 + d, &mut out);
+                        self.advance(t0 + d, now_s, self.cursor + 1, end, &mut out);
                     }
+                }
+                State::Running(Run::AwaitPlan { sp, slot, .. }) => {
+                    out.events.push(SequencerEvent::PlanNeeded { slot });
+                    break Some(sp);
                 }
                 State::Running(Run::ThermalPause { t0, sp }) => {
                     let Some(timed_out) = self.thermal_releases(now_s, t0, thermal) else {
@@ -853,14 +1188,11 @@ impl Sequencer {
                         duration_s,
                         timed_out,
                     });
-                    if self.cursor + 1 >= self.plan.steps.len() {
-                        self.last_setpoint = Some(sp);
-                        self.complete(now_s, &mut out);
-                    } else {
-                        self.cursor += 1;
+                    let next = self.cursor + 1;
+                    if next < self.plan.steps.len() && self.open_slot_at(next).is_none() {
                         out.events.push(SequencerEvent::CheckpointChanged);
-                        self.enter_step(now_s, &mut out);
                     }
+                    self.advance(now_s, now_s, next, sp, &mut out);
                 }
             }
         };
@@ -929,7 +1261,7 @@ impl Sequencer {
     fn phase(&self) -> u8 {
         match &self.state {
             State::Idle => ProcedureState::PHASE_IDLE,
-            State::Running(Run::Transition { .. }) => ProcedureState::PHASE_SETTLE,
+            State::Running(Run::Transition { .. } | Run::AwaitPlan { .. }) => ProcedureState::PHASE_SETTLE,
             State::Running(Run::Step { .. }) => phase_of_kind(self.plan.steps[self.cursor].kind),
             State::Running(Run::ThermalPause { .. }) => ProcedureState::PHASE_THERMAL_PAUSE,
             State::Paused { .. } => ProcedureState::PHASE_PAUSED,

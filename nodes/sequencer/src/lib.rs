@@ -18,5 +18,5 @@ pub mod core;
 #[cfg(feature = "dds")]
 pub mod shell;
 
-pub use config::SequencerConfig;
+pub use config::{PlanKind, SequencerConfig};
 pub use core::{Checkpoint, CommandRejected, Sequencer, SequencerError, SequencerEvent, SequencerOutput};

@@ -155,6 +155,13 @@ pub async fn run(mut node: RosNode, cfg: SequencerNodeConfig, shutdown: Shutdown
         limits: cfg.core.envelope,
     };
     let plan = procedure::expand(&doc, &inputs).map_err(|e| SequencerNodeError::Procedure(e.to_string()))?;
+    if cfg.core.plan == crate::PlanKind::Adaptive {
+        // The planner needs the live fit's coefficient covariance in-process (ModelState carries
+        // only its maps): the adaptive plan runs headless (`tyrerig run --headless --plan adaptive`).
+        return Err(SequencerNodeError::Core(
+            "sequencer config `plan = \"adaptive\"`: the adaptive plan runs headless only (`tyrerig run --headless --plan adaptive`)".into(),
+        ));
+    }
     let checkpoint = match &cfg.checkpoint {
         Some(p) => read_checkpoint(p)?,
         None => None,

@@ -20,6 +20,8 @@ use std::collections::BTreeMap;
 use thermal::{ThermalConfig, ThermalGate};
 use tyre_msgs::{ProcedureCommand, RigSample, builtin_interfaces::Time, std_msgs::Header};
 
+mod adaptive_step;
+
 /// Why a headless run could not start or went wrong.
 #[derive(Debug, thiserror::Error)]
 pub enum HeadlessError {
@@ -168,7 +170,7 @@ impl Headless {
         // The sequencer guards the same machine as the rig: its pressure envelope is the rig's.
         seq_cfg.envelope.min_pressure_bar = inputs.limits.min_pressure_bar;
         seq_cfg.envelope.max_pressure_bar = inputs.limits.max_pressure_bar;
-        let seq = Sequencer::new(plan, seq_cfg).map_err(|e| HeadlessError::Sequencer(e.to_string()))?;
+        let seq = Sequencer::for_config(plan, seq_cfg).map_err(|e| HeadlessError::Sequencer(e.to_string()))?;
         // The monitor judges the data against the tyre's own (sidewall) rating, which the
         // operator's entry may contradict: it is not told the entry, it has to see it in the loads.
         let tyre_info = tyre_info(&rig_cfg, &tyre)?;
@@ -382,6 +384,12 @@ impl Headless {
                 sink.put(t, Outgoing::Procedure(st))?;
             }
             let mut done = false;
+            if out.events.iter().any(|e| matches!(e, SequencerEvent::PlanNeeded { .. })) {
+                // The adaptive plan decides with the live model as it is now: the update after
+                // the previous sweep ran in this loop when that sweep's segment closed. Closing
+                // a slot at the plan's end completes the run.
+                done = self.plan_next(t, sink, &mut sum)?;
+            }
             for ev in &out.events {
                 sum.on_event(ev);
                 match ev {

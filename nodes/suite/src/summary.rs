@@ -61,6 +61,35 @@ pub struct RunSummary {
     /// Highest TRDTEMPC seen at a sweep's start and during sweeps [°C].
     pub max_sweep_start_temp_c: f64,
     pub max_temp_c: f64,
+    /// The adaptive plan's decisions, in order (`--plan adaptive`; empty otherwise).
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub adaptive: Vec<AdaptiveChoice>,
+}
+
+/// One decision of the adaptive plan, as the run summary reports it.
+#[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize)]
+pub struct AdaptiveChoice {
+    /// Rig time of the decision [s].
+    #[serde(with = "adaptive::nan_as_null")]
+    pub rig_time_s: f64,
+    /// The slot.
+    pub slot: usize,
+    /// The chosen sweep; empty when the slot closed.
+    pub sweep: String,
+    /// Predicted value, (% of peak)², and cost [s].
+    #[serde(with = "adaptive::nan_as_null")]
+    pub value: f64,
+    #[serde(with = "adaptive::nan_as_null")]
+    pub cost_s: f64,
+    /// Predicted error before and after it, and the slot's target, % of peak.
+    #[serde(with = "adaptive::nan_as_null")]
+    pub error_pct: f64,
+    #[serde(with = "adaptive::nan_as_null")]
+    pub error_after_pct: f64,
+    #[serde(with = "adaptive::nan_as_null")]
+    pub target_pct: f64,
+    /// Why.
+    pub reason: String,
 }
 
 /// The thesis's §11 rig-time table, for comparison: (row, seconds).
@@ -192,6 +221,28 @@ impl SummaryBuilder {
                 }
             }
             E::TyreChange { .. } => self.summary.tyre_changes += 1,
+            E::SweepChosen { slot, name, value, cost_s, error_pct, error_after_pct, target_pct, reason } => {
+                self.summary.adaptive.push(AdaptiveChoice {
+                    rig_time_s: self.summary.total_rig_time_s,
+                    slot: *slot,
+                    sweep: name.clone(),
+                    value: *value,
+                    cost_s: *cost_s,
+                    error_pct: *error_pct,
+                    error_after_pct: *error_after_pct,
+                    target_pct: *target_pct,
+                    reason: reason.clone(),
+                });
+            }
+            E::SlotClosed { slot, error_pct, reason, .. } => self.summary.adaptive.push(AdaptiveChoice {
+                rig_time_s: self.summary.total_rig_time_s,
+                slot: *slot,
+                error_pct: *error_pct,
+                error_after_pct: *error_pct,
+                target_pct: f64::NAN,
+                reason: reason.clone(),
+                ..AdaptiveChoice::default()
+            }),
             E::Completed { .. } => self.summary.completed = true,
             _ => {}
         }

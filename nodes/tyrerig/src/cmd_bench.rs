@@ -64,6 +64,9 @@ pub enum BenchCmd {
     /// The live fit (docs/live-fit.md) on a recorded run: wall time of every update, when each
     /// stage becomes identified; with --offline/--truth/--heldout its accuracy and band coverage.
     LiveFit(crate::bench_livefit::LiveFitBench),
+    /// The adaptive plan (docs/adaptive-plan.md): rig time to accuracy against the true tyre,
+    /// beside GS2MF and the Square Matrix, per tyre and seed.
+    Adaptive(crate::bench_adaptive::AdaptiveBench),
 }
 
 /// Wall clock, ns since the UNIX epoch.
@@ -145,6 +148,9 @@ pub fn run(cmd: BenchCmd) -> anyhow::Result<()> {
     if let BenchCmd::LiveFit(args) = &cmd {
         return crate::bench_livefit::run(args);
     }
+    if let BenchCmd::Adaptive(args) = &cmd {
+        return crate::bench_adaptive::run(args);
+    }
     let rt = tokio::runtime::Builder::new_multi_thread().enable_all().build().context("tokio")?;
     let secure = matches!(cmd, BenchCmd::DdsLatency { secure: true, .. } | BenchCmd::Recorder { secure: true, .. });
     let (cfg, _keystore) = bench_config(secure)?;
@@ -152,6 +158,7 @@ pub fn run(cmd: BenchCmd) -> anyhow::Result<()> {
     match cmd {
         // Returned above, before the DDS set-up it does not need.
         BenchCmd::LiveFit(args) => crate::bench_livefit::run(&args),
+        BenchCmd::Adaptive(args) => crate::bench_adaptive::run(&args),
         BenchCmd::Foxglove { clients, rate_hz, seconds, port } => {
             rt.block_on(crate::bench_foxglove::run(clients, rate_hz, seconds, port))
         }

@@ -73,6 +73,15 @@ pub struct RunArgs {
     /// default: each update refits the staged model (~0.5–2 s of CPU).
     #[arg(long)]
     pub fit: bool,
+    /// fixed (every step of the procedure) | adaptive (docs/adaptive-plan.md: the fixed parts,
+    /// the other sweeps chosen by the live model's predicted variance reduction per rig second
+    /// until the model is predicted as good as the full procedure's; turns on --fit; headless).
+    #[arg(long, default_value = "fixed")]
+    pub plan: sequencer::PlanKind,
+    /// With --plan adaptive: stop a slot when its predicted error is within this factor of the
+    /// full procedure's predicted error (default 1.15).
+    #[arg(long)]
+    pub target_ratio: Option<f64>,
     /// With --fit: the fitted .tir written at the end (default: the log's path with .tir).
     #[arg(long, requires = "fit")]
     pub fit_tir: Option<PathBuf>,
@@ -146,6 +155,11 @@ fn fit_output(args: &RunArgs) -> livefit::output::ModelOutput {
 
 pub fn run(args: RunArgs) -> anyhow::Result<()> {
     if !args.headless {
+        if args.plan == sequencer::PlanKind::Adaptive {
+            anyhow::bail!(
+                "--plan adaptive runs headless only: the planner needs the live fit's covariance in-process (add --headless)"
+            );
+        }
         return run_dds(&args);
     }
     if args.foxglove.is_some() {
@@ -153,11 +167,20 @@ pub fn run(args: RunArgs) -> anyhow::Result<()> {
     }
     let spec = spec_of(&args);
     let wall = std::time::Instant::now();
-    let mut headless = Headless::new(&spec, thermal::ThermalConfig::default(), sequencer::SequencerConfig::default())?;
-    if args.fit {
+    let mut seq_cfg = sequencer::SequencerConfig { plan: args.plan, ..sequencer::SequencerConfig::default() };
+    if let Some(r) = args.target_ratio {
+        seq_cfg.adaptive.target_ratio = r;
+    }
+    seq_cfg.validate()?;
+    let adaptive = args.plan == sequencer::PlanKind::Adaptive;
+    let mut headless = Headless::new(&spec, thermal::ThermalConfig::default(), seq_cfg)?;
+    if args.fit || adaptive {
         headless = headless.with_live_fit(livefit::LiveFitConfig::default());
     }
-    let metadata = headless.metadata(&spec);
+    let mut metadata = headless.metadata(&spec);
+    if let Some(p) = metadata.get_mut("procedure") {
+        p.insert("plan".into(), format!("{:?}", args.plan).to_lowercase());
+    }
     let mut sink = McapSink::create(&args.out, "/rig", &metadata)?;
     let planned = headless.plan().estimate_total_s(&procedure::PauseModel::default());
     let bar = if args.quiet {
@@ -178,7 +201,7 @@ pub fn run(args: RunArgs) -> anyhow::Result<()> {
     bar.finish_and_clear();
     let messages = sink.finish()?;
     let wall_s = wall.elapsed().as_secs_f64();
-    if args.fit {
+    if args.fit || adaptive {
         let result = headless.live_fit_result().context("--fit: the live fit produced no model")?;
         let files = livefit::output::write_model(result, &fit_output(&args))?;
         let mut walls = headless.live_fit_update_walls().to_vec();
@@ -192,6 +215,13 @@ pub fn run(args: RunArgs) -> anyhow::Result<()> {
         );
     }
     println!("{}", summary.table());
+    for c in &summary.adaptive {
+        if c.sweep.is_empty() {
+            println!("adaptive {:>7.0} s  slot {} closed: {}", c.rig_time_s, c.slot, c.reason);
+        } else {
+            println!("adaptive {:>7.0} s  slot {} {}: {}", c.rig_time_s, c.slot, c.sweep, c.reason);
+        }
+    }
     println!(
         "log: {} ({} messages); rig time {:.0} s in {:.1} s wall = {:.0}x real time{}",
         args.out.display(),

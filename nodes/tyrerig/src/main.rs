@@ -7,6 +7,7 @@
 use clap::{Parser, Subcommand};
 
 // --- subcommand modules (one per capability) ---
+mod bench_adaptive;
 mod bench_foxglove;
 mod bench_livefit;
 mod cmd_bench;

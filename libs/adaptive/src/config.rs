@@ -1,0 +1,88 @@
+//! The planner's settings (the sequencer config's `[adaptive]` table).
+
+use serde::{Deserialize, Serialize};
+
+/// How the adaptive planner chooses and when it stops.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct AdaptiveConfig {
+    /// A slot stops when its predicted held-out error (% of peak, RMS over the slot's target
+    /// channels) is at most `target_ratio` × the error predicted for running every remaining
+    /// candidate of the slot, i.e. the full procedure's content. 1.0 would run until nothing
+    /// is left to learn; the default accepts a predicted error 15 % above the full run's.
+    pub target_ratio: f64,
+    /// An absolute target instead (% of peak): a slot also stops when its predicted error is
+    /// at most this. `None`: only the ratio.
+    pub target_error_pct: Option<f64>,
+    /// At most this fraction of the full procedure's predicted cost of a slot's candidates is
+    /// spent on the slot (the rig-time budget); 1.0 = no limit beyond the full content.
+    pub budget_fraction: f64,
+    /// Planned points per candidate sweep in the linearisation (spread evenly over its time).
+    /// Points along one sweep are correlated, so a few tens stand for a whole sweep.
+    pub points_per_sweep: usize,
+    /// Prior standard deviation of a coefficient the fit holds for want of data (a pressure or
+    /// camber level not tested yet): MF coefficients are O(0.1–1), so 0.3 says "unknown".
+    pub held_prior_std: f64,
+    /// A candidate is worth running only if it lowers the slot's predicted error by at least
+    /// this fraction (relative).
+    pub min_relative_gain: f64,
+    /// Severe sweeps (run last): peak slip angle at least this \[deg\] …
+    pub severe_slip_angle_deg: f64,
+    /// … or a load at least this factor of Fz0.
+    pub severe_load_factor: f64,
+    /// A slot's first choices (until every target channel has a covariance) go by coverage:
+    /// the cheapest candidate that informs an unfitted channel.
+    pub bootstrap_by_cost: bool,
+}
+
+impl Default for AdaptiveConfig {
+    fn default() -> Self {
+        Self {
+            target_ratio: 1.15,
+            target_error_pct: None,
+            budget_fraction: 1.0,
+            points_per_sweep: 24,
+            held_prior_std: 0.3,
+            min_relative_gain: 0.005,
+            severe_slip_angle_deg: 18.0,
+            severe_load_factor: 1.75,
+            bootstrap_by_cost: true,
+        }
+    }
+}
+
+impl AdaptiveConfig {
+    /// Checks ranges; the error names the key.
+    pub fn validate(&self) -> Result<(), (&'static str, String)> {
+        let pos = [
+            ("target_ratio", self.target_ratio),
+            ("budget_fraction", self.budget_fraction),
+            ("held_prior_std", self.held_prior_std),
+            ("severe_slip_angle_deg", self.severe_slip_angle_deg),
+            ("severe_load_factor", self.severe_load_factor),
+        ];
+        for (k, v) in pos {
+            if !(v.is_finite() && v > 0.0) {
+                return Err((k, format!("expected a positive number, got {v}")));
+            }
+        }
+        if self.target_ratio < 1.0 {
+            return Err((
+                "target_ratio",
+                format!("expected ≥ 1 (the full run's predicted error is the floor), got {}", self.target_ratio),
+            ));
+        }
+        if let Some(t) = self.target_error_pct
+            && !(t.is_finite() && t > 0.0)
+        {
+            return Err(("target_error_pct", format!("expected a positive percentage, got {t}")));
+        }
+        if !(self.min_relative_gain.is_finite() && (0.0..1.0).contains(&self.min_relative_gain)) {
+            return Err(("min_relative_gain", format!("expected 0 ≤ x < 1, got {}", self.min_relative_gain)));
+        }
+        if self.points_per_sweep < 2 {
+            return Err(("points_per_sweep", format!("expected at least 2, got {}", self.points_per_sweep)));
+        }
+        Ok(())
+    }
+}

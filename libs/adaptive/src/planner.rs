@@ -1,0 +1,349 @@
+//! The choice of the next sweep and the stop rule.
+//!
+//! At a slot the planner scores every candidate not yet run: its value is the reduction of the
+//! predicted mean-squared prediction error over the envelope grid of the targets it informs
+//! ([`crate::design`]), its cost the predicted rig time to the end of its cool-down from where
+//! the rig is (a pressure change counts when the pressure differs, so sweeps at the pressure the
+//! rig is at are cheaper: pressure changes come grouped). It runs the best value per second among
+//! the ordinary candidates, and severe ones (high slip angle or load: wear, heat) only when no
+//! ordinary candidate is worth running any more. It stops a slot when the predicted error over
+//! the slot's targets is within [`AdaptiveConfig::target_ratio`] of what every remaining
+//! candidate together would give (the full procedure's content), when nothing left lowers it by
+//! [`AdaptiveConfig::min_relative_gain`], or when the slot's rig-time budget is spent.
+
+use nalgebra::DMatrix;
+use procedure::Setpoint;
+use serde::{Deserialize, Serialize};
+
+use crate::config::AdaptiveConfig;
+use crate::design;
+use crate::library::{Candidate, Library};
+use crate::model::{ModelView, Target};
+
+/// One decision, with why (the sequencer logs it and puts it on `/diagnostics`).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct Decision {
+    /// The slot.
+    pub slot: usize,
+    /// The chosen candidate; `None`: the slot is closed.
+    pub candidate: Option<usize>,
+    /// Its sweep name (empty when closing).
+    pub name: String,
+    /// Its predicted value: reduction of the mean squared predicted error, (% of peak)².
+    #[serde(with = "crate::nan_as_null")]
+    pub value: f64,
+    /// Its predicted cost \[s\].
+    #[serde(with = "crate::nan_as_null")]
+    pub cost_s: f64,
+    /// Predicted error over the slot's targets before it (% of peak, RMS over targets).
+    #[serde(with = "crate::nan_as_null")]
+    pub error_pct: f64,
+    /// Predicted error after it.
+    #[serde(with = "crate::nan_as_null")]
+    pub error_after_pct: f64,
+    /// Predicted error if every remaining candidate ran (the full procedure's content).
+    #[serde(with = "crate::nan_as_null")]
+    pub full_error_pct: f64,
+    /// The error the slot stops at.
+    #[serde(with = "crate::nan_as_null")]
+    pub target_pct: f64,
+    /// Why, in words.
+    pub reason: String,
+}
+
+/// What the planner has decided so far: enough to continue after a checkpoint.
+#[derive(Debug, Clone, PartialEq, Default, Serialize, Deserialize)]
+pub struct PlannerState {
+    /// Candidates chosen, in order.
+    pub used: Vec<usize>,
+    /// Slots closed.
+    pub closed: Vec<usize>,
+    /// Predicted rig time spent per slot \[s\].
+    pub spent_s: Vec<f64>,
+    /// Every decision.
+    pub decisions: Vec<Decision>,
+}
+
+/// A state that does not belong to the library.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+#[error("adaptive planner state: {0}")]
+pub struct StateMismatch(pub String);
+
+/// The planner.
+#[derive(Debug, Clone)]
+pub struct Planner {
+    cfg: AdaptiveConfig,
+    lib: Library,
+    state: PlannerState,
+}
+
+struct Scored {
+    id: usize,
+    value: f64,
+    cost_s: f64,
+    error_after_pct: f64,
+}
+
+/// RMS over targets of per-target errors (% of peak).
+fn rms(errors: &[f64]) -> f64 {
+    if errors.is_empty() {
+        return 0.0;
+    }
+    (errors.iter().map(|e| e * e).sum::<f64>() / errors.len() as f64).sqrt()
+}
+
+impl Planner {
+    /// A planner with nothing decided.
+    pub fn new(lib: Library, cfg: AdaptiveConfig) -> Self {
+        let spent_s = vec![0.0; lib.slots.len()];
+        Planner { cfg, lib, state: PlannerState { spent_s, ..PlannerState::default() } }
+    }
+
+    /// A planner continuing from `state` (a checkpoint's).
+    pub fn restore(lib: Library, cfg: AdaptiveConfig, state: PlannerState) -> Result<Self, StateMismatch> {
+        if let Some(bad) = state.used.iter().find(|&&id| id >= lib.candidates.len()) {
+            return Err(StateMismatch(format!("candidate {bad} not in the library ({})", lib.candidates.len())));
+        }
+        if let Some(bad) = state.closed.iter().find(|&&s| s >= lib.slots.len()) {
+            return Err(StateMismatch(format!("slot {bad} not in the library ({})", lib.slots.len())));
+        }
+        let mut state = state;
+        state.spent_s.resize(lib.slots.len(), 0.0);
+        Ok(Planner { cfg, lib, state })
+    }
+
+    /// The library.
+    pub fn library(&self) -> &Library {
+        &self.lib
+    }
+
+    /// What was decided so far.
+    pub fn state(&self) -> &PlannerState {
+        &self.state
+    }
+
+    /// The settings.
+    pub fn config(&self) -> &AdaptiveConfig {
+        &self.cfg
+    }
+
+    /// True once `slot` is closed.
+    pub fn is_closed(&self, slot: usize) -> bool {
+        self.state.closed.contains(&slot)
+    }
+
+    fn remaining(&self, slot: usize) -> Vec<&Candidate> {
+        self.lib.slots[slot]
+            .candidates
+            .iter()
+            .filter(|id| !self.state.used.contains(id))
+            .map(|&id| &self.lib.candidates[id])
+            .collect()
+    }
+
+    /// The slot's targets: what any of its candidates informs.
+    fn targets(&self, slot: usize) -> Vec<Target> {
+        let mut t: Vec<Target> = Vec::new();
+        for &id in &self.lib.slots[slot].candidates {
+            for &x in self.lib.candidates[id].kind.targets() {
+                if !t.contains(&x) {
+                    t.push(x);
+                }
+            }
+        }
+        t.sort();
+        t
+    }
+
+    /// Decide what runs next in `slot`, the rig at `from`, the live model `view`;
+    /// `pause_scale`: observed pauses over the pause model's so far (1 without evidence).
+    pub fn decide(&mut self, slot: usize, from: Setpoint, view: &dyn ModelView, pause_scale: f64) -> Decision {
+        let d = self.evaluate(slot, from, view, pause_scale);
+        match d.candidate {
+            Some(id) => {
+                self.state.used.push(id);
+                self.state.spent_s[slot] += d.cost_s;
+            }
+            None => {
+                if !self.state.closed.contains(&slot) {
+                    self.state.closed.push(slot);
+                }
+            }
+        }
+        self.state.decisions.push(d.clone());
+        d
+    }
+
+    /// What [`Planner::decide`] would decide, without deciding it.
+    pub fn evaluate(&self, slot: usize, from: Setpoint, view: &dyn ModelView, pause_scale: f64) -> Decision {
+        let close = |reason: String, e: f64, full: f64, target: f64| Decision {
+            slot,
+            candidate: None,
+            name: String::new(),
+            value: 0.0,
+            cost_s: 0.0,
+            error_pct: e,
+            error_after_pct: e,
+            full_error_pct: full,
+            target_pct: target,
+            reason,
+        };
+        if slot >= self.lib.slots.len() || self.is_closed(slot) {
+            return close("no such open slot".into(), f64::NAN, f64::NAN, f64::NAN);
+        }
+        let scale = if pause_scale.is_finite() && pause_scale > 0.0 { pause_scale } else { 1.0 };
+        let limits = self.lib.limits;
+        let remaining = self.remaining(slot);
+        if remaining.is_empty() {
+            return close("every candidate has run".into(), f64::NAN, f64::NAN, f64::NAN);
+        }
+        let budget_s = self.cfg.budget_fraction * self.lib.slots[slot].full_cost_s;
+        let spent = self.state.spent_s.get(slot).copied().unwrap_or(0.0);
+        let affordable = |c: &Candidate| spent + c.cost_s(from, &limits, scale) <= budget_s + 1e-9;
+        let targets = self.targets(slot);
+
+        // Bootstrap: a target without a model yet (its stage not fitted) is learnt first, by
+        // the cheapest candidate that informs it (ordinary before severe).
+        let missing: Vec<Target> = targets.iter().copied().filter(|t| view.target(*t).is_none()).collect();
+        let informs_missing = |c: &&Candidate| c.kind.targets().iter().any(|t| missing.contains(t));
+        let boot: Vec<&Candidate> =
+            remaining.iter().copied().filter(informs_missing).filter(|c| affordable(c)).collect();
+        if !boot.is_empty() {
+            let best = boot
+                .iter()
+                .min_by(|a, b| {
+                    (a.severe, a.cost_s(from, &limits, scale))
+                        .partial_cmp(&(b.severe, b.cost_s(from, &limits, scale)))
+                        .unwrap_or(std::cmp::Ordering::Equal)
+                })
+                .copied()
+                .unwrap_or(boot[0]);
+            let names: Vec<&str> = missing.iter().map(|t| t.name()).collect();
+            return Decision {
+                slot,
+                candidate: Some(best.id),
+                name: best.name.clone(),
+                value: f64::NAN,
+                cost_s: best.cost_s(from, &limits, scale),
+                error_pct: f64::NAN,
+                error_after_pct: f64::NAN,
+                full_error_pct: f64::NAN,
+                target_pct: f64::NAN,
+                reason: format!("no model of {} yet: the cheapest sweep that measures it", names.join(", ")),
+            };
+        }
+
+        // The known targets' models; errors now and with every remaining candidate.
+        let known: Vec<(Target, &crate::model::TargetModel)> =
+            targets.iter().filter_map(|&t| view.target(t).map(|m| (t, m))).collect();
+        if known.is_empty() {
+            return close(
+                "no target of this slot has a model, and no candidate measures one".into(),
+                f64::NAN,
+                f64::NAN,
+                f64::NAN,
+            );
+        }
+        let sens = |c: &Candidate, t: Target| -> Option<DMatrix<f64>> {
+            c.kind.targets().contains(&t).then(|| view.sensitivities(t, &c.points))
+        };
+        let now: Vec<f64> = known.iter().map(|(_, m)| m.error_pct()).collect();
+        let e_now = rms(&now);
+        let full: Vec<f64> = known
+            .iter()
+            .map(|(t, m)| {
+                let mut cov = m.cov.clone();
+                for c in &remaining {
+                    if let Some(j) = sens(c, *t) {
+                        cov = design::updated(&cov, &j, m.sigma);
+                    }
+                }
+                100.0 * design::mean_variance(&m.h, &cov).sqrt()
+            })
+            .collect();
+        let e_full = rms(&full);
+        let mut target = self.cfg.target_ratio * e_full;
+        if let Some(abs) = self.cfg.target_error_pct {
+            target = target.max(abs);
+        }
+        if e_now <= target {
+            return close(
+                format!("predicted error {e_now:.3} % ≤ target {target:.3} % (full procedure: {e_full:.3} %)"),
+                e_now,
+                e_full,
+                target,
+            );
+        }
+
+        let scored: Vec<(bool, bool, Scored)> = remaining
+            .iter()
+            .map(|c| {
+                let after: Vec<f64> = known
+                    .iter()
+                    .map(|(t, m)| match sens(c, *t) {
+                        Some(j) => 100.0 * design::mean_variance(&m.h, &design::updated(&m.cov, &j, m.sigma)).sqrt(),
+                        None => m.error_pct(),
+                    })
+                    .collect();
+                let value: f64 =
+                    now.iter().zip(&after).map(|(a, b)| (a * a - b * b).max(0.0)).sum::<f64>() / known.len() as f64;
+                let e_after = rms(&after);
+                let useful = e_after <= e_now * (1.0 - self.cfg.min_relative_gain);
+                let s = Scored { id: c.id, value, cost_s: c.cost_s(from, &limits, scale), error_after_pct: e_after };
+                (c.severe, useful && affordable(c), s)
+            })
+            .collect();
+        let best_of = |severe: bool| {
+            scored.iter().filter(|(sv, ok, _)| *sv == severe && *ok).map(|(_, _, s)| s).fold(
+                None::<&Scored>,
+                |best, s| match best {
+                    Some(b) if b.value / b.cost_s.max(1e-9) >= s.value / s.cost_s.max(1e-9) => Some(b),
+                    _ => Some(s),
+                },
+            )
+        };
+        let (pick, tier) = match best_of(false) {
+            Some(s) => (s, "best value per second"),
+            None => match best_of(true) {
+                Some(s) => (s, "severe, run last: best value per second"),
+                None => {
+                    let any_useful_unaffordable = scored.iter().any(|(_, ok, s)| !ok && s.error_after_pct < e_now);
+                    let why = if any_useful_unaffordable && spent > 0.0 {
+                        format!("rig-time budget of {budget_s:.0} s spent ({spent:.0} s)")
+                    } else {
+                        format!(
+                            "no sweep lowers the predicted error ({e_now:.3} %) by {:.1} % or more",
+                            100.0 * self.cfg.min_relative_gain
+                        )
+                    };
+                    return close(why, e_now, e_full, target);
+                }
+            },
+        };
+        let c = &self.lib.candidates[pick.id];
+        let pressure_note = if (c.pressure_bar - from.pressure_bar).abs() > 1e-9 {
+            format!(", pressure {} → {} bar", fmt(from.pressure_bar), fmt(c.pressure_bar))
+        } else {
+            String::new()
+        };
+        Decision {
+            slot,
+            candidate: Some(pick.id),
+            name: c.name.clone(),
+            value: pick.value,
+            cost_s: pick.cost_s,
+            error_pct: e_now,
+            error_after_pct: pick.error_after_pct,
+            full_error_pct: e_full,
+            target_pct: target,
+            reason: format!(
+                "{tier}: {:.4} (%²) in {:.0} s{pressure_note}; predicted error {e_now:.3} → {:.3} % (target {target:.3} %)",
+                pick.value, pick.cost_s, pick.error_after_pct
+            ),
+        }
+    }
+}
+
+fn fmt(x: f64) -> String {
+    procedure::primitives::fmt_num(x)
+}

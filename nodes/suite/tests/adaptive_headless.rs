@@ -1,0 +1,119 @@
+//! The adaptive plan end to end, headless: virtual rig, thermal gate, sequencer, live fit. A
+//! small procedure keeps it short: a warm-up and a heating sweep (fixed), then four force &
+//! moment candidates at two pressures.
+
+use std::path::Path;
+use suite::sink::{MessageSink, Outgoing};
+use suite::{Headless, ProcedureChoice, RunSpec, RunSummary};
+
+const MINI: &str = r#"
+[procedure]
+name = "mini_adaptive"
+title = "Mini adaptive"
+config_tag = "FreeRoll"
+mode = "free_rolling"
+
+[[section]]
+name = "warmup"
+pressure = "mid"
+
+[[section.step]]
+kind = "warm_up"
+blocks = 1
+loads = [0.9]
+peak_deg = 8.0
+rate_dps = 4.0
+roll_s = 5.0
+
+[[section]]
+name = "heating_sweep"
+pressure = "mid"
+
+[[section.step]]
+kind = "sweep"
+peak_deg = 12.0
+low_rate_dps = 2.0
+high_rate_dps = 30.0
+threshold_deg = 4.0
+loads = [1.0]
+
+[[section]]
+name = "force_moment"
+pressures = ["low", "high"]
+
+[[section.step]]
+kind = "sweep"
+peak_deg = 12.0
+low_rate_dps = 2.0
+high_rate_dps = 30.0
+threshold_deg = 4.0
+loads = [0.6, 1.4]
+"#;
+
+#[derive(Default)]
+struct Capture {
+    decisions: Vec<String>,
+}
+
+impl MessageSink for Capture {
+    fn put(&mut self, _t: f64, msg: Outgoing<'_>) -> Result<(), mcaplog::LogWriteError> {
+        if let Outgoing::Diagnostics(d) = msg {
+            for s in &d.status {
+                if s.name == "sequencer: adaptive" {
+                    self.decisions.push(s.message.clone());
+                }
+            }
+        }
+        Ok(())
+    }
+}
+
+fn run(dir: &Path) -> (RunSummary, Capture, Vec<String>) {
+    let file = dir.join("mini_adaptive.toml");
+    std::fs::write(&file, MINI).unwrap();
+    let mut spec =
+        RunSpec::new(&Path::new(env!("CARGO_MANIFEST_DIR")).join("../../launch-config"), ProcedureChoice::Gs2mf);
+    spec.procedure_file = file;
+    spec.seed = 1;
+    let cfg = sequencer::SequencerConfig { plan: sequencer::PlanKind::Adaptive, ..Default::default() };
+    let mut h = Headless::new(&spec, thermal::ThermalConfig::default(), cfg)
+        .expect("adaptive suite builds")
+        .with_live_fit(livefit::LiveFitConfig::default());
+    // The fixed plan holds no force & moment sweep: those are the candidates.
+    assert!(!h.plan().sections.is_empty());
+    let fm = h.plan().sections.iter().position(|s| s.name.starts_with("force_moment")).unwrap();
+    assert!(!h.plan().steps.iter().any(|s| s.section_index == fm && s.kind == procedure::StepKind::Sweep));
+    let mut cap = Capture::default();
+    let summary = h.run(&mut cap, &mut |_, _| {}).expect("run");
+    let ran: Vec<String> = h.plan().steps.iter().filter(|s| s.sweep_index.is_some()).map(|s| s.name.clone()).collect();
+    (summary, cap, ran)
+}
+
+#[test]
+fn adaptive_plan_chooses_runs_logs_and_repeats_its_decisions() {
+    let dir = tempfile::tempdir().unwrap();
+    let (a, cap, ran) = run(dir.path());
+    println!("{}", a.table());
+    for c in &a.adaptive {
+        println!("{:>7.0} s slot {} {}: {}", c.rig_time_s, c.slot, c.sweep, c.reason);
+    }
+    assert!(a.completed, "{a:?}");
+    assert!(!a.alarms.iter().any(|x| x.check == "envelope"), "{:?}", a.alarms);
+    // At least one choice, and the slot closed at the end with a reason.
+    let chosen: Vec<&str> = a.adaptive.iter().filter(|c| !c.sweep.is_empty()).map(|c| c.sweep.as_str()).collect();
+    assert!(!chosen.is_empty());
+    let last = a.adaptive.last().unwrap();
+    assert!(last.sweep.is_empty() && !last.reason.is_empty(), "{last:?}");
+    assert!(chosen.len() <= 4);
+    // Every choice ran (it is in the plan the sequencer ran) and was logged on /diagnostics.
+    for c in &chosen {
+        assert!(ran.iter().any(|r| r == c), "{c} chosen, not run: {ran:?}");
+    }
+    assert_eq!(cap.decisions.len(), a.adaptive.len());
+    assert!(cap.decisions.iter().any(|m| m.contains("chose ")));
+    // Same config and seed: the same decisions.
+    let (b, _, _) = run(dir.path());
+    let names = |s: &RunSummary| s.adaptive.iter().map(|c| c.sweep.clone()).collect::<Vec<_>>();
+    assert_eq!(names(&a), names(&b));
+    assert_eq!(a.total_rig_time_s, b.total_rig_time_s);
+}
