@@ -252,7 +252,7 @@ pub fn structural(params: &TyreParams, keys: &[&'static str], levels: &Levels) -
 
 /// The Jacobian (data residuals only, in channel units per unit coefficient) of `channel` over
 /// `points` with respect to `keys`, at `params` (values clamped into their fitting bounds).
-fn jacobian(
+pub fn jacobian(
     params: &TyreParams,
     keys: &[&'static str],
     points: &[Point],
@@ -284,11 +284,18 @@ pub fn by_jacobian(
     channel: Channel,
     threads: usize,
 ) -> Identification {
-    let mut out = Identification::default();
     if keys.is_empty() || points.is_empty() {
+        return Identification::default();
+    }
+    judge_jacobian(params, keys, &jacobian(params, keys, points, channel, threads))
+}
+
+/// [`by_jacobian`] on a Jacobian already in hand (columns in the order of `keys`).
+pub fn judge_jacobian(params: &TyreParams, keys: &[&'static str], j: &DMatrix<f64>) -> Identification {
+    let mut out = Identification::default();
+    if keys.is_empty() || j.nrows() == 0 {
         return out;
     }
-    let j = jacobian(params, keys, points, channel, threads);
     let norms: Vec<f64> = (0..keys.len()).map(|c| j.column(c).norm()).collect();
     let biggest = norms.iter().copied().filter(|x| x.is_finite()).fold(0.0, f64::max);
     // Orthonormal basis of the accepted columns (modified Gram–Schmidt, twice for accuracy).
@@ -383,6 +390,20 @@ pub fn uncertainty_with_covariance(
     channel: Channel,
     threads: usize,
 ) -> (Vec<Estimate>, f64, Vec<f64>) {
+    uncertainty_from(params, keys, points, groups, channel, || jacobian(params, keys, points, channel, threads))
+}
+
+/// [`uncertainty_with_covariance`] with the Jacobian at `params` from `jacobian_at_params`
+/// (called only when there is something to estimate): a fit that judged its keys on that
+/// Jacobian hands it over instead of differencing the model again.
+pub fn uncertainty_from(
+    params: &TyreParams,
+    keys: &[&'static str],
+    points: &[Point],
+    groups: &[usize],
+    channel: Channel,
+    jacobian_at_params: impl FnOnce() -> DMatrix<f64>,
+) -> (Vec<Estimate>, f64, Vec<f64>) {
     let n = keys.len();
     let m = points.len();
     let nan = |k: &&str| Estimate { key: (*k).into(), value: params.get(k).unwrap_or(f64::NAN), std: f64::NAN };
@@ -393,7 +414,7 @@ pub fn uncertainty_with_covariance(
     let ssr: f64 = res.iter().map(|r| r * r).sum();
     let s2 = ssr / (m - n) as f64;
     let inflation = serial_inflation(&res, groups);
-    let j = jacobian(params, keys, points, channel, threads);
+    let j = jacobian_at_params();
     let svd = j.svd(false, true);
     let (Some(vt), sv) = (svd.v_t.as_ref(), &svd.singular_values) else {
         return (keys.iter().map(nan).collect(), inflation, Vec::new());

@@ -185,10 +185,20 @@ pub fn finish(
     all: &StagePoints,
     margins: Option<MarginSet>,
 ) -> Result<(), FitError> {
+    let jacobian = |params: &TyreParams, keys: &[&'static str]| {
+        identify::jacobian(params, keys, &all.points, channel, ctx.settings.threads)
+    };
+    // The Jacobian of the last verdict, while the parameters are still where it was taken.
+    let mut judged_at_solution = None;
     for _round in 0..3 {
         let fitted: Vec<&'static str> = rep.free.iter().copied().filter(|k| rep.keys.iter().any(|x| x == k)).collect();
-        let verdict = identify::by_jacobian(params, &fitted, &all.points, channel, ctx.settings.threads);
+        if fitted.is_empty() || all.points.is_empty() {
+            break;
+        }
+        let j = jacobian(params, &fitted);
+        let verdict = identify::judge_jacobian(params, &fitted, &j);
         if verdict.held.is_empty() {
+            judged_at_solution = Some(j);
             break;
         }
         let names: Vec<String> = verdict.held.iter().map(|h| h.key.clone()).collect();
@@ -217,7 +227,9 @@ pub fn finish(
     }
     let fitted: Vec<&'static str> = rep.free.iter().copied().filter(|k| rep.keys.iter().any(|x| x == k)).collect();
     let (est, inflation, covariance) =
-        identify::uncertainty_with_covariance(params, &fitted, &all.points, &all.groups, channel, ctx.settings.threads);
+        identify::uncertainty_from(params, &fitted, &all.points, &all.groups, channel, || {
+            judged_at_solution.unwrap_or_else(|| jacobian(params, &fitted))
+        });
     rep.estimates = est;
     rep.serial_inflation = inflation;
     rep.covariance = covariance;
