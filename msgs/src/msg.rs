@@ -485,6 +485,16 @@ impl ModelStage {
     pub const FITTING: u8 = 1;
     /// fitted; every coefficient the stage needs has a finite standard deviation
     pub const IDENTIFIED: u8 = 2;
+
+    /// The status in words (`waiting`, `fitting`, `identified`).
+    pub fn status_name(status: u8) -> &'static str {
+        match status {
+            Self::WAITING => "waiting",
+            Self::FITTING => "fitting",
+            Self::IDENTIFIED => "identified",
+            _ => "unknown",
+        }
+    }
 }
 
 /// `tyre_msgs/ModelMap`: one channel's prediction and uncertainty over the envelope grid.

@@ -53,7 +53,7 @@ const SUITE_TOPICS = {
   "/diagnostics": "diagnostic_msgs/msg/DiagnosticArray",
   "/clock": "rosgraph_msgs/msg/Clock",
 };
-const VIEW_TOPICS = ["plan", "progress", "sweep_trace", "sweep_trace_previous", "alarms"].map(
+const VIEW_TOPICS = ["plan", "progress", "sweep_trace", "sweep_trace_previous", "alarms", "model"].map(
   (v) => `${NS}/foxglove/${v}`,
 );
 

@@ -81,9 +81,13 @@ pub fn compare(truth: &TyreParams, fitted: &TyreParams, range: &ValidRange, supp
     compare_with(&|mode, x| mftyre::evaluate(truth, mode, x), fitted, range, support)
 }
 
+/// A reference tyre as a function of use mode and operating point (a virtual rig's true tyre,
+/// MF or brush; a measured map).
+pub type ReferenceTyre<'a> = dyn Fn(UseMode, &MfInput) -> mftyre::MfOutput + 'a;
+
 /// [`compare`] against any reference tyre given as a function (a brush tyre, a measured map).
 pub fn compare_with(
-    truth: &dyn Fn(UseMode, &MfInput) -> mftyre::MfOutput,
+    truth: &ReferenceTyre<'_>,
     fitted: &TyreParams,
     range: &ValidRange,
     support: &Support,

@@ -72,6 +72,28 @@ impl Channel {
     }
 }
 
+impl Channel {
+    /// The channel's value from any tyre given as a function (e.g. a virtual rig's brush tyre as
+    /// the reference a fit is scored against), read the way [`Channel::eval`] reads the MF: the
+    /// pure channels with the other slip at zero.
+    pub fn eval_reference(self, tyre: &crate::accuracy::ReferenceTyre<'_>, input: &MfInput) -> f64 {
+        let pure = |kappa: f64, alpha_rad: f64| MfInput { kappa, alpha_rad, ..*input };
+        match self {
+            Channel::Fy0 => tyre(UseMode::M211, &pure(0.0, input.alpha_rad)).fy_n,
+            Channel::Fx0 => tyre(UseMode::M211, &pure(input.kappa, 0.0)).fx_n,
+            Channel::Mz0 => tyre(UseMode::M212, input).mz_nm,
+            Channel::Mx => tyre(UseMode::M212, input).mx_nm,
+            Channel::Fx => tyre(UseMode::M211, input).fx_n,
+            Channel::Fy => tyre(UseMode::M211, input).fy_n,
+            Channel::Mz => tyre(UseMode::M211, input).mz_nm,
+            Channel::Rl => tyre(UseMode::M211, input).rl_m,
+            Channel::Re => tyre(UseMode::M211, input).re_m,
+            Channel::Cx => tyre(UseMode::M211, input).cx_npm,
+            Channel::SigmaY => tyre(UseMode::M211, input).sigmay_m,
+        }
+    }
+}
+
 /// One data point: operating condition and measured value.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Point {

@@ -349,7 +349,7 @@ pub fn coverage(
     result: &FitResult,
     other: &crate::Dataset,
     opts: &crate::FitOptions,
-    truth: Option<&mftyre::TyreParams>,
+    truth: Option<&crate::accuracy::ReferenceTyre<'_>>,
 ) -> Vec<Coverage> {
     use crate::stages::{Ctx, STAGES};
     let ctx = Ctx {
@@ -380,7 +380,7 @@ pub fn coverage(
                 inside += 1;
             }
             if let Some(t) = truth
-                && (ch.eval(t, &p.input) - y).abs() <= 1.96 * sd
+                && (ch.eval_reference(t, &p.input) - y).abs() <= 1.96 * sd
             {
                 truth_inside += 1;
             }

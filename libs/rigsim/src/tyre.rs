@@ -120,6 +120,25 @@ impl VirtualTyre {
         }
     }
 
+    /// The tyre itself, steady state and without the rig's effects (heat, wear, break-in): the
+    /// truth a fitted model is scored against. The brush tyre has one behaviour for every use
+    /// mode.
+    pub fn reference(&self, mode: UseMode, input: &MfInput) -> MfOutput {
+        match self {
+            VirtualTyre::Mf(p) => mftyre::evaluate(p, mode, input),
+            VirtualTyre::Brush(b) => b.evaluate(&BrushInput {
+                fz_n: input.fz_n,
+                kappa: input.kappa,
+                alpha_rad: input.alpha_rad,
+                gamma_rad: input.gamma_rad,
+                vx_mps: input.vx_mps,
+                p_pa: input.p_pa,
+                grip_factor: 1.0,
+                stiffness_factor: 1.0,
+            }),
+        }
+    }
+
     /// The scaling factors of the file (MF) or neutral ones (brush).
     pub(crate) fn base_scaling(&self) -> ScalingFactors {
         match self {

@@ -13,7 +13,7 @@ use crate::views::{
 use procedure::{PauseModel, Plan};
 use serde::Serialize;
 use tyre_msgs::diagnostic_msgs::{DiagnosticArray, DiagnosticStatus as DS};
-use tyre_msgs::{ProcedureCommand, ProcedureState as PS, QualityReport, RigSample, ThermalState as TS};
+use tyre_msgs::{ModelState, ProcedureCommand, ProcedureState as PS, QualityReport, RigSample, ThermalState as TS};
 
 /// A suite message the views are built from.
 #[derive(Debug, Clone, Copy)]
@@ -23,6 +23,7 @@ pub enum Input<'a> {
     Thermal(&'a TS),
     Quality(&'a QualityReport),
     Diagnostics(&'a DiagnosticArray),
+    Model(&'a ModelState),
 }
 
 /// A view message ready to send: its channel, log time (rig time, ns) and JSON.
@@ -208,6 +209,10 @@ impl ViewCore {
                 self.advance(q.header.stamp.as_secs_f64());
                 self.quality = Some(q.clone());
                 self.progress_dirty = true;
+            }
+            Input::Model(m) => {
+                self.advance(m.header.stamp.as_secs_f64());
+                self.emit(&mut out, View::Model, &crate::model::ModelView::of(m));
             }
             Input::Diagnostics(d) => {
                 self.advance(d.header.stamp.as_secs_f64());

@@ -22,7 +22,7 @@ use std::sync::atomic::{AtomicU64, Ordering};
 use std::sync::{Arc, Mutex};
 use tokio::sync::mpsc;
 use tyre_msgs::diagnostic_msgs::DiagnosticArray;
-use tyre_msgs::{ProcedureCommand, ProcedureState, QualityReport, RigSample, RosMessage, ThermalState};
+use tyre_msgs::{ModelState, ProcedureCommand, ProcedureState, QualityReport, RigSample, RosMessage, ThermalState};
 
 /// Why the node stopped with an error.
 #[derive(Debug, thiserror::Error)]
@@ -316,6 +316,9 @@ fn as_input<M: Any>(msg: &M) -> Option<Input<'_>> {
     }
     if let Some(s) = any.downcast_ref::<QualityReport>() {
         return Some(Input::Quality(s));
+    }
+    if let Some(s) = any.downcast_ref::<ModelState>() {
+        return Some(Input::Model(s));
     }
     any.downcast_ref::<DiagnosticArray>().map(Input::Diagnostics)
 }

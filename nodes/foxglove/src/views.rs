@@ -8,6 +8,7 @@
 //! | `foxglove/sweep_trace` | `tyrerig.SweepTrace` | the running sweep's forces over slip | view rate |
 //! | `foxglove/sweep_trace_previous` | `tyrerig.SweepTrace` | the sweep before it, complete | end of each sweep |
 //! | `foxglove/alarms` | `foxglove.Log` | alarms as they rise, phase changes, commands | on event |
+//! | `foxglove/model` | `tyrerig.Model` | the live fit: stages identified, NRMSE, 95 % bands over slip ([`crate::model`]) | each `model/state` |
 
 use serde::Serialize;
 
@@ -19,10 +20,12 @@ pub enum View {
     SweepTrace,
     PreviousSweepTrace,
     Alarms,
+    Model,
 }
 
 impl View {
-    pub const ALL: [View; 5] = [View::Plan, View::Progress, View::SweepTrace, View::PreviousSweepTrace, View::Alarms];
+    pub const ALL: [View; 6] =
+        [View::Plan, View::Progress, View::SweepTrace, View::PreviousSweepTrace, View::Alarms, View::Model];
 
     /// Name relative to the namespace.
     pub fn relative_name(self) -> &'static str {
@@ -32,6 +35,7 @@ impl View {
             View::SweepTrace => "foxglove/sweep_trace",
             View::PreviousSweepTrace => "foxglove/sweep_trace_previous",
             View::Alarms => "foxglove/alarms",
+            View::Model => "foxglove/model",
         }
     }
 
@@ -46,6 +50,7 @@ impl View {
             View::SweepTrace | View::PreviousSweepTrace => "tyrerig.SweepTrace",
             // Foxglove's own log schema: the Log panel shows it as it does ROS logs.
             View::Alarms => "foxglove.Log",
+            View::Model => "tyrerig.Model",
         }
     }
 
@@ -56,6 +61,7 @@ impl View {
             View::Progress => PROGRESS_SCHEMA.to_owned(),
             View::SweepTrace | View::PreviousSweepTrace => TRACE_SCHEMA.to_owned(),
             View::Alarms => LOG_SCHEMA.to_owned(),
+            View::Model => crate::model::MODEL_SCHEMA.to_owned(),
         }
     }
 
@@ -63,7 +69,7 @@ impl View {
     /// does for the suite's state and event topics).
     pub fn latched(self) -> usize {
         match self {
-            View::Plan | View::Progress | View::SweepTrace | View::PreviousSweepTrace => 1,
+            View::Plan | View::Progress | View::SweepTrace | View::PreviousSweepTrace | View::Model => 1,
             View::Alarms => 1000,
         }
     }

@@ -30,4 +30,4 @@ pub mod state;
 
 pub use config::LiveFitConfig;
 pub use core::{LiveFit, Trigger, UpdateDone, UpdateJob};
-pub use state::{stage_status, status_name};
+pub use state::stage_status;

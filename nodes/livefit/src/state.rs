@@ -33,16 +33,6 @@ pub fn stage_status(rep: &StageReport) -> (u8, String) {
     (ModelStage::IDENTIFIED, String::new())
 }
 
-/// Name of a `ModelStage` status.
-pub fn status_name(status: u8) -> &'static str {
-    match status {
-        ModelStage::WAITING => "waiting",
-        ModelStage::FITTING => "fitting",
-        ModelStage::IDENTIFIED => "identified",
-        _ => "unknown",
-    }
-}
-
 fn stage_msg(rep: &StageReport) -> ModelStage {
     let (status, status_reason) = stage_status(rep);
     ModelStage {

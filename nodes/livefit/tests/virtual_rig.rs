@@ -107,7 +107,8 @@ fn live_fit_on_a_freerolling_run_matches_the_offline_fit_and_its_bands_hold() {
 
     // Calibration on the other run: the 95 % band for a new measurement holds 90–98 % of them.
     let other = mffit::logs::read_log(&other_log).unwrap();
-    let cov = mffit::prediction::coverage(live, &other, &LiveFitConfig::default().fit_options(), Some(&truth));
+    let reference = |mode: mftyre::UseMode, x: &mftyre::MfInput| mftyre::evaluate(&truth, mode, x);
+    let cov = mffit::prediction::coverage(live, &other, &LiveFitConfig::default().fit_options(), Some(&reference));
     for c in &cov {
         eprintln!("{c:?}");
     }

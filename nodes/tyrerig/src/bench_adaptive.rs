@@ -15,9 +15,7 @@ use livefit::replay::{feed, inputs_of_log};
 use livefit::{LiveFit, LiveFitConfig};
 use mffit::accuracy::{AccuracyRow, Support, compare_with};
 use mffit::{Dataset, FitResult};
-use mftyre::{MfInput, MfOutput, UseMode};
-use rigsim::VirtualTyre;
-use rigsim::brush::BrushInput;
+use mftyre::{MfInput, UseMode};
 use serde_json::json;
 use std::path::{Path, PathBuf};
 use suite::headless::{Headless, rig_and_tyre};
@@ -149,28 +147,6 @@ fn fit_prefix(data: &Dataset, n: usize) -> anyhow::Result<FitResult> {
     mffit::fit(&d, &opts).map_err(|e| anyhow::anyhow!("fit of {n} segments: {e}"))
 }
 
-/// The rig's true tyre as a function of the operating point.
-type Truth<'a> = Box<dyn Fn(UseMode, &MfInput) -> MfOutput + 'a>;
-
-fn truth_fn(tyre: &VirtualTyre) -> Truth<'_> {
-    match (tyre.mf_params(), tyre.brush_params()) {
-        (Some(p), _) => Box::new(move |mode, x| mftyre::evaluate(p, mode, x)),
-        (None, Some(b)) => Box::new(move |_, x| {
-            b.evaluate(&BrushInput {
-                fz_n: x.fz_n,
-                kappa: x.kappa,
-                alpha_rad: x.alpha_rad,
-                gamma_rad: x.gamma_rad,
-                vx_mps: x.vx_mps,
-                p_pa: x.p_pa,
-                grip_factor: 1.0,
-                stiffness_factor: 1.0,
-            })
-        }),
-        (None, None) => Box::new(|_, _| MfOutput::default()),
-    }
-}
-
 fn mean_error(rows: &[AccuracyRow]) -> f64 {
     let v: Vec<f64> =
         rows.iter().map(|r| if r.rms_pct_of_peak.is_finite() { r.rms_pct_of_peak } else { 1e9 }).collect();
@@ -191,7 +167,7 @@ pub fn run(args: &AdaptiveBench) -> anyhow::Result<()> {
             spec.rig_config = rig.clone();
             spec.seed = seed;
             let (_, tyre) = rig_and_tyre(&spec)?;
-            let truth = truth_fn(&tyre);
+            let truth = |mode: UseMode, x: &MfInput| tyre.reference(mode, x);
             let mut logs = Vec::new();
             for plan in plans(args) {
                 let log = args.out_dir.join(format!("{tyre_label}_{}_s{seed}.mcap", plan.label));
@@ -203,7 +179,7 @@ pub fn run(args: &AdaptiveBench) -> anyhow::Result<()> {
             let (g_data, _) = timeline(&logs[0].1)?;
             let reference = fit_prefix(&g_data, g_data.segments.len())?;
             let support = Support::of_fit(&reference);
-            let score = |fit: &FitResult| compare_with(&*truth, &fit.params, &reference.range, &support);
+            let score = |fit: &FitResult| compare_with(&truth, &fit.params, &reference.range, &support);
             let e_ref = mean_error(&score(&reference));
             let mut times = Vec::new();
             for (plan, log, summary) in &logs {

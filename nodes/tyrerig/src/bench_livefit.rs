@@ -5,9 +5,10 @@
 
 use anyhow::Context as _;
 use livefit::replay::{Input, feed, inputs_of_log};
-use livefit::{LiveFit, LiveFitConfig, Trigger, status_name};
-use mffit::accuracy::{AccuracyRow, Support, compare};
-use mftyre::TyreParams;
+use livefit::{LiveFit, LiveFitConfig, Trigger};
+use mffit::accuracy::{AccuracyRow, ReferenceTyre, Support, compare_with};
+use mftyre::{MfInput, TyreParams, UseMode};
+use rigsim::VirtualTyre;
 use serde_json::json;
 use std::path::PathBuf;
 use std::time::Instant;
@@ -20,7 +21,7 @@ use crate::cmd_bench::percentile;
 pub struct LiveFitBench {
     /// A GS2MF log (e.g. from `tyrerig run --headless`).
     pub log: PathBuf,
-    /// The run's true tyre (the virtual rig's .tir): accuracy of the live and the offline model.
+    /// The run's true tyre (the virtual rig's `.tir`, or its brush tyre file): accuracy of the live and the offline model.
     #[arg(long)]
     pub truth: Option<PathBuf>,
     /// Also fit the log offline (as `tyrerig fit --folds 0`) and compare.
@@ -154,7 +155,7 @@ pub fn run(args: &LiveFitBench) -> anyhow::Result<()> {
             t(ident),
             ident.map_or("–".into(), |u| u.state.update_index.to_string()),
             ident.map_or("–".into(), |u| u.state.segments_used.to_string()),
-            status_name(st.status),
+            ModelStage::status_name(st.status),
             if st.status_reason.is_empty() { String::new() } else { format!(" ({})", st.status_reason) }
         );
         timeline.push(json!({
@@ -163,14 +164,15 @@ pub fn run(args: &LiveFitBench) -> anyhow::Result<()> {
             "identified_rig_s": ident.map(|u| u.state.header.stamp.as_secs_f64()),
             "identified_update": ident.map(|u| u.state.update_index),
             "identified_segments": ident.map(|u| u.state.segments_used),
-            "final_status": status_name(st.status),
+            "final_status": ModelStage::status_name(st.status),
             "final_reason": st.status_reason,
         }));
     }
 
-    let truth = args.truth.as_ref().map(|p| TyreParams::read_tir(p)).transpose()?;
+    let truth = args.truth.as_deref().map(read_truth).transpose()?;
+    let reference = truth.as_ref().map(|t| move |mode: UseMode, x: &MfInput| t.reference(mode, x));
     let accuracy = |fit: &mffit::FitResult| -> Vec<AccuracyRow> {
-        truth.as_ref().map_or_else(Vec::new, |t| compare(t, &fit.params, &fit.range, &Support::of_fit(fit)))
+        reference.as_ref().map_or_else(Vec::new, |t| compare_with(t, &fit.params, &fit.range, &Support::of_fit(fit)))
     };
     let live_acc = accuracy(&live);
     let mut offline_json = serde_json::Value::Null;
@@ -200,7 +202,8 @@ pub fn run(args: &LiveFitBench) -> anyhow::Result<()> {
     let mut coverage_json = serde_json::Value::Null;
     if let Some(h) = &args.heldout {
         let other = mffit::logs::read_log(h)?;
-        let rows = mffit::prediction::coverage(&live, &other, &cfg.fit_options(), truth.as_ref());
+        let reference = reference.as_ref().map(|t| t as &ReferenceTyre<'_>);
+        let rows = mffit::prediction::coverage(&live, &other, &cfg.fit_options(), reference);
         println!("predicted 95 % bands on {} (points the fit never saw):", h.display());
         for r in &rows {
             println!(
@@ -230,4 +233,16 @@ pub fn run(args: &LiveFitBench) -> anyhow::Result<()> {
         std::fs::write(path, serde_json::to_string_pretty(&doc)?).with_context(|| format!("{}", path.display()))?;
     }
     Ok(())
+}
+
+/// The run's true tyre: a `.tir` (MF-Tyre) or a brush tyre file (`.toml`).
+fn read_truth(path: &std::path::Path) -> anyhow::Result<VirtualTyre> {
+    let tyre = if path.extension().is_some_and(|e| e.eq_ignore_ascii_case("tir")) {
+        VirtualTyre::from(TyreParams::read_tir(path)?)
+    } else {
+        VirtualTyre::from(
+            rigsim::brush::BrushParams::load(path).with_context(|| format!("--truth {}", path.display()))?,
+        )
+    };
+    Ok(tyre)
 }
