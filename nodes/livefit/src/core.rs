@@ -6,6 +6,7 @@ use std::sync::Arc;
 
 use mffit::logs::Segmenter;
 use mffit::prediction::{EnvelopeGrid, PredictionMap, prediction_maps_since};
+use mffit::stages::UPSTREAM_NOTE;
 use mffit::{DataKind, Dataset, FitResult, Segment, WarmStart};
 use tyre_msgs::builtin_interfaces::Time;
 use tyre_msgs::{ModelState, ProcedureState, RigSample};
@@ -262,8 +263,13 @@ impl UpdateJob {
     /// Fits and maps the uncertainty.
     pub fn run(self) -> UpdateDone {
         let mut result = mffit::fit(&self.data, &self.opts);
-        if self.final_update {
-            result = polish(result, &self.data, &self.opts);
+        let why = if self.final_update {
+            Some("final model".to_owned())
+        } else {
+            result.as_ref().ok().and_then(|r| r.wants_fresh_fit()).map(|stage| format!("{stage} {UPSTREAM_NOTE}; kept"))
+        };
+        if let Some(why) = why {
+            result = polish(result, &self.data, &self.opts, &why);
         }
         let mut grid = self.grid;
         let mut maps = Vec::new();
@@ -317,14 +323,17 @@ fn widest_gap(warm: &FitResult, fresh: &FitResult) -> String {
         .map_or("no stage fitted by both".into(), |(s, w, c)| format!("widest gap {s}: {w:.3} % vs {c:.3} %"))
 }
 
-/// The final model: the warm-started one, or a fresh fit of all data (as `tyrerig fit` makes it)
-/// when that fits the data better. Warm starts carry the path the data took: a coefficient set
-/// found on the first sweeps can sit in a local minimum that a fresh start avoids. Which one was
-/// kept is the first of the fit's warnings.
+/// The final model — and the model of an update whose warm start left a stage worse than its last
+/// fresh fit even after refitting that stage ([`UPSTREAM_NOTE`]) — is the warm-started one, or a
+/// fresh fit of all data (as `tyrerig fit` makes it) when that fits the data better. Warm starts
+/// carry the path the data took: a coefficient set found on the first sweeps can sit in a local
+/// minimum that a fresh start avoids. Which one was kept, and `why` the comparison ran, is the
+/// first of the fit's warnings.
 fn polish(
     warm: Result<FitResult, mffit::FitError>,
     data: &Dataset,
     opts: &mffit::FitOptions,
+    why: &str,
 ) -> Result<FitResult, mffit::FitError> {
     let cold_opts = mffit::FitOptions { warm_start: None, ..opts.clone() };
     let cold = mffit::fit(data, &cold_opts);
@@ -333,7 +342,7 @@ fn polish(
             let (sw, sc) = (score(&w, &c), score(&c, &w));
             let keep_warm = sw <= sc;
             let note = format!(
-                "final model: {} (sum of stage NRMSE: warm-started {sw:.3} %, fresh fit {sc:.3} %; {})",
+                "{why}: {} (sum of stage NRMSE: warm-started {sw:.3} %, fresh fit {sc:.3} %; {})",
                 if keep_warm { "warm-started" } else { "fresh fit" },
                 widest_gap(&w, &c)
             );

@@ -81,6 +81,11 @@ pub struct FitOptions {
 /// How the note of a stage a warm-started fit refitted from the data's start ends.
 pub const COLD_START_NOTE: &str = "fitted from the data's start, not warm";
 
+/// How the note of a stage ends that stayed above [`WARM_WORSENING`] × its last fresh NRMSE even
+/// after its own refit from the data's start: the stages before it moved, and a live update
+/// then fits the whole model fresh as well ([`FitResult::wants_fresh_fit`]).
+pub const UPSTREAM_NOTE: &str = "still worse after its own fresh refit: the stages before it moved";
+
 /// A warm-started stage ending above this multiple of its previous NRMSE (plus
 /// [`WARM_WORSENING_PCT`]) is fitted afresh: a new sweep moves a converged NRMSE by a few
 /// percent of itself, a warm start stuck in a poor region by several times.
@@ -397,6 +402,13 @@ impl FitResult {
         self.stages.iter().filter(|s| !s.nonphysical.is_empty()).map(|s| s.stage.as_str()).collect()
     }
 
+    /// The first stage a warm start left worse than its last fresh fit even after refitting it
+    /// from the data's start ([`UPSTREAM_NOTE`]): the warm stages before it sit in another
+    /// minimum, and only a fresh fit of the whole model tells.
+    pub fn wants_fresh_fit(&self) -> Option<&str> {
+        self.stages.iter().find(|s| s.notes.iter().any(|n| n.ends_with(UPSTREAM_NOTE))).map(|s| s.stage.as_str())
+    }
+
     /// True when `stage` ran and fitted at least one key.
     pub fn fitted(&self, stage: &str) -> bool {
         self.stages.iter().any(|s| s.stage == stage && s.skipped.is_none() && !s.keys.is_empty())
@@ -549,6 +561,9 @@ pub fn fit(data: &Dataset, opts: &FitOptions) -> Result<FitResult, FitError> {
             rep.peak = context::peak_abs(&selection.points);
             rep.notes.push(note);
             outcome = stage.fit(cold, &mut params, &selection, &mut rep);
+            if outcome.is_ok() && rep.nrmse_pct() > WARM_WORSENING * prev + WARM_WORSENING_PCT {
+                rep.notes.push(format!("{:.2} % NRMSE {UPSTREAM_NOTE}", rep.nrmse_pct()));
+            }
         }
         rep.started_fresh = !warm || rep.notes.iter().any(|n| n.ends_with(COLD_START_NOTE));
         match outcome {
