@@ -81,7 +81,8 @@ fn check_path(path: &str) -> Result<(), String> {
     }
     let rest = rest.strip_prefix('.').unwrap_or(rest);
     let fields: Vec<&str> =
-        if rest.is_empty() { Vec::new() } else { rest.split('.').map(|f| f.trim_end_matches("[:]")).collect() };
+        // A slice (`[:]`) or an index (`[0]`) of an array field names the field itself.
+        if rest.is_empty() { Vec::new() } else { rest.split('.').map(|f| f.split('[').next().unwrap_or(f)).collect() };
     let check = |fields: &[&str]| -> Result<(), String> {
         match (suite, view) {
             (Some(t), _) => ros_fields_exist(&t.ros_type_name(), fields),
@@ -137,6 +138,8 @@ fn every_message_path_names_a_served_channel_and_its_fields() {
     assert!(check_path("/rig/thermal/state.baseline_degc").is_err());
     assert!(check_path("/rig/foxglove/sweep_trace.fyw_n[:]").is_ok());
     assert!(check_path("/rig/foxglove/sweep_trace.fy_n[:]").is_err());
+    assert!(check_path("/rig/foxglove/model.bands[1].lower[:]").is_ok());
+    assert!(check_path("/rig/foxglove/model.bands[1].low[:]").is_err());
     assert!(check_path("/rig/channels/derived{quantitty==\"x\"}.value").is_err());
     assert!(check_path("/rig/nothing.value").is_err());
 }
