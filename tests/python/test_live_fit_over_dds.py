@@ -101,3 +101,24 @@ def test_the_fit_node_publishes_a_model_after_every_segment_and_writes_it_at_the
     tir = log.with_suffix(".tir").read_text()
     assert "FITTYP" in tir and "PDY1" in tir, tir[:500]
     assert (report / "fit.json").exists(), sorted(p.name for p in report.iterdir())
+
+    # The monitor follows the model: the quality node puts its view of every update on
+    # /diagnostics, and the run report gets a live-model section and plot.
+    watched = [st for m in read_ros2_messages(str(log), topics=["/diagnostics"])
+               for st in m.ros_msg.status if st.name == "tyrerig monitor: live_model"]
+    assert len(watched) >= len(states) - 1, (len(watched), len(states))
+    last = {kv.key: kv.value for kv in watched[-1].values}
+    assert last["updates"] == str(len(states)), last
+    assert last["identified"].endswith(f"/{len(states[-1].stages)}"), last
+    assert "fy_pure" in last and watched[-1].message.startswith("live model:"), watched[-1].message
+    out = tmp_path / "run_report"
+    done = subprocess.run([str(tyrerig), "report", str(log), "--out", str(out)], capture_output=True, text=True,
+                          timeout=300)
+    assert done.returncode == 0, done.stderr[-3000:]
+    md = (out / "report.md").read_text()
+    # The first updates wait for force & moment data: that is no failure.
+    failed = sum(1 for s in states if s.error and not s.error.startswith("no usable data"))
+    assert failed == 0, [s.error for s in states]
+    assert "## Live model" in md and f"{len(states)} updates (0 failed;" in md, md[:2000]
+    assert "| fy_pure | FY |" in md, md
+    assert (out / "live_model.png").exists(), sorted(p.name for p in out.iterdir())

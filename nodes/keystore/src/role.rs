@@ -110,7 +110,9 @@ impl Role {
             Role::Rig => &[T::RigSetpoint],
             Role::Thermal => &[T::RigSample, T::ProcedureState],
             Role::Sequencer => &[T::RigSample, T::ThermalState, T::ProcedureCommand],
-            Role::Quality | Role::Fit => &[T::RigSample, T::ProcedureState],
+            // The quality node also follows the live fit's model (monitor::model_watch).
+            Role::Quality => &[T::RigSample, T::ProcedureState, T::ModelState],
+            Role::Fit => &[T::RigSample, T::ProcedureState],
             Role::Recorder | Role::Operator | Role::Monitor => &SuiteTopic::ALL,
         }
     }

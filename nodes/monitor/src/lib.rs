@@ -14,6 +14,9 @@
 //!   `/diagnostics` (`diagnostic_msgs/DiagnosticArray`, one status per check) from
 //!   [`MonitorOutput`]; its [`Alarm`]s go to the run summary's `alarms`.
 //!
+//! [`ModelWatch`] follows the live fit (`model/state`): stages identified, when, failed updates;
+//! the quality node logs it and puts it on `/diagnostics`, the report plots it.
+//!
 //! Checks ([`core::CHECKS`]): `load_rating`, `wear`, `graph_sweep_drift`, `break_in`, `chatter`,
 //! `thermal_timeout`; thresholds in [`MonitorConfig`] with their thesis sources.
 //!
@@ -26,6 +29,7 @@
 pub mod config;
 pub mod core;
 pub mod drift;
+pub mod model_watch;
 pub mod pipeline;
 pub mod report;
 #[cfg(feature = "dds")]
@@ -34,4 +38,5 @@ pub mod wear;
 
 pub use config::{ConfigError, Levels, MonitorConfig, TyreInfo};
 pub use core::{Alarm, MonitorCore, MonitorOutput, WearEstimate};
+pub use model_watch::{ModelWatch, ModelWatchOutput};
 pub use pipeline::{Pipeline, PipelineError, PipelineOutput};

@@ -21,10 +21,13 @@ use channels::{ChannelsConfig, DerivedMeasurement, Quantity};
 use mcaplog::{LogReader, codec};
 use plotters::coord::Shift;
 use plotters::prelude::*;
-use tyre_msgs::{ProcedureState, QualityCheck, QualityReport, RigSample, RosMessage, SweepSummary};
+use tyre_msgs::{
+    ModelStage, ModelState, ProcedureState, QualityCheck, QualityReport, RigSample, RosMessage, SweepSummary,
+};
 
 use crate::config::{MonitorConfig, TyreInfo};
 use crate::core::{Alarm, DriftRecord, WearEstimate};
+use crate::model_watch::ModelWatch;
 use crate::pipeline::{Pipeline, PipelineError, PipelineOutput};
 
 /// Why a report could not be made. Names the file or topic.
@@ -111,6 +114,23 @@ pub fn inputs(reader: &LogReader) -> Result<Vec<Input>, ReportError> {
     Ok(out)
 }
 
+/// The live fit's model states in the log (`tyre_msgs/ModelState`, whatever the namespace), in
+/// log order; empty when the run had no live fit.
+pub fn model_states(reader: &LogReader) -> Result<Vec<ModelState>, ReportError> {
+    let ty = ModelState::ros_type_name();
+    let mut out = Vec::new();
+    for (index, m) in reader.messages().iter().enumerate().filter(|(_, m)| m.ros_type == ty) {
+        out.push(codec::decode(&m.data, &m.ros_type).map_err(|e| ReportError::Decode {
+            path: reader.path().to_owned(),
+            topic: m.topic.clone(),
+            ros_type: m.ros_type.clone(),
+            index,
+            detail: e.to_string(),
+        })?);
+    }
+    Ok(out)
+}
+
 /// The tyre as the log's metadata describes it: the declared rating from the tyre file's
 /// `fnomin_n` (the smallest load index whose Fz0 reaches it), the entered one from
 /// `tyre.load_index` (the index the procedure's loads were built from).
@@ -186,6 +206,8 @@ pub struct Replay {
     pub end_time_s: f64,
     /// What the log is missing (`LogReader::loss_summary`), filled by [`run`].
     pub data_loss: Vec<String>,
+    /// The live fit's progress, when the log has `model/state` (filled by [`run`]).
+    pub model: Option<ModelWatch>,
 }
 
 /// Replays `inputs` through a fresh pipeline, handing every output to `each` (a test compares
@@ -575,6 +597,35 @@ pub fn write_report(r: &Replay, log_name: &str, out_dir: &Path, format: Format) 
         );
     }
 
+    // The live fit: each stage's error after every update.
+    if let Some(w) = r.model.as_ref().filter(|w| w.stages().any(|h| !h.nrmse_trace.is_empty())) {
+        let series = w
+            .stages()
+            .filter(|h| !h.nrmse_trace.is_empty())
+            .enumerate()
+            .map(|(i, h)| Series {
+                label: h.stage.clone(),
+                points: h.nrmse_trace.clone(),
+                color: i,
+                // Past the palette the markers tell the stages apart.
+                dots: i >= PALETTE.len(),
+            })
+            .collect();
+        let p = Panel {
+            legend: SeriesLabelPosition::UpperRight,
+            title: "Live fit: stage NRMSE after each update".into(),
+            x_label: "rig time [s]".into(),
+            y_label: "NRMSE [% of peak]".into(),
+            series,
+        };
+        let files = draw(out_dir, "live_model", &[p], 1, format)?;
+        add(
+            "Live fit: each stage's RMS residual (% of its peak) after every update".into(),
+            "live_model".into(),
+            files,
+        );
+    }
+
     let md = markdown(r, log_name, &figs);
     let path = out_dir.join("report.md");
     std::fs::write(&path, md).map_err(|source| ReportError::Io { path: path.clone(), source })?;
@@ -623,6 +674,9 @@ fn markdown(r: &Replay, log_name: &str, figs: &[(String, String)]) -> String {
             let _ =
                 writeln!(s, "| {:.1} | {} | {} | {} |", a.rig_time_s, a.level, a.check, a.message.replace('|', "\\|"));
         }
+    }
+    if let Some(w) = &r.model {
+        live_model_markdown(&mut s, w);
     }
     if !r.data_loss.is_empty() {
         let _ = writeln!(s, "\n## Data loss\n");
@@ -738,6 +792,49 @@ fn markdown(r: &Replay, log_name: &str, figs: &[(String, String)]) -> String {
     s
 }
 
+/// The live fit's section: per stage when it became identified and where it ended.
+fn live_model_markdown(s: &mut String, w: &ModelWatch) {
+    let (n_id, n) = w.identified();
+    let _ = writeln!(s, "\n## Live model\n");
+    let _ = writeln!(
+        s,
+        "{} updates ({} failed; the first ones may wait for data){}; {n_id} of {n} stages identified at the end.\n",
+        w.updates(),
+        w.failed_updates(),
+        if w.final_seen() { ", the final one at the procedure's end" } else { "; no final update in the log" }
+    );
+    let _ = writeln!(
+        s,
+        "| stage | channel | status | identified at rig s | NRMSE % | points | worst σ/value | lost identification | why not identified |\n|---|---|---|---|---|---|---|---|---|"
+    );
+    for h in w.stages() {
+        let _ = writeln!(
+            s,
+            "| {} | {} | {} | {} | {} | {} | {} | {} | {} |",
+            h.stage,
+            h.channel,
+            ModelStage::status_name(h.status),
+            h.first_identified_s.map_or("–".into(), |t| format!("{t:.0}")),
+            h.nrmse_trace.last().map_or("–".into(), |(_, v)| fmt(*v, 2)),
+            h.points,
+            match (h.worst_rel_std, h.worst_key.as_str()) {
+                (_, "") => "–".to_owned(),
+                (r, k) if r.is_infinite() => format!("∞ ({k})"),
+                (r, k) => format!("{} ({k})", fmt(r, 3)),
+            },
+            h.lost_identification,
+            h.reason.replace('|', "\\|")
+        );
+    }
+    let warnings: Vec<_> = w.events().iter().filter(|e| e.level != QualityCheck::OK).collect();
+    if !warnings.is_empty() {
+        let _ = writeln!(s, "\n| rig time s | warning |\n|---|---|");
+        for e in warnings {
+            let _ = writeln!(s, "| {:.1} | {} |", e.rig_time_s, e.message.replace('|', "\\|"));
+        }
+    }
+}
+
 /// Reads `log`, replays it and writes the report into `out_dir`. `tyre` overrides the log's
 /// metadata.
 pub fn run(
@@ -754,6 +851,14 @@ pub fn run(
     let ins = inputs(&reader)?;
     let mut r = replay(&ins, channels_cfg, monitor_cfg, tyre, &mut |_| {})?;
     r.data_loss = reader.loss_summary().lines;
+    let models = model_states(&reader)?;
+    if !models.is_empty() {
+        let mut w = ModelWatch::new();
+        for m in &models {
+            w.on_model_state(m);
+        }
+        r.model = Some(w);
+    }
     let name = log.file_name().map_or_else(|| log.display().to_string(), |n| n.to_string_lossy().into_owned());
     let path = write_report(&r, &name, out_dir, format)?;
     Ok((path, r))

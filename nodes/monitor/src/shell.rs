@@ -2,18 +2,20 @@
 //! [`Pipeline`] exactly as a headless run and a replay wire them, so a recorded log replays to
 //! the same outputs.
 //!
-//! In: `rig/sample`, `procedure/state`. Out: `rig/channels/live` (every sample),
+//! In: `rig/sample`, `procedure/state`, `model/state` (the live fit's, when one runs: followed by
+//! [`ModelWatch`]). Out: `rig/channels/live` (every sample),
 //! `rig/channels/sweep_summary`, `rig/quality/report` (on change), `/diagnostics` (with every
-//! report). Derived measurements and alarms are logged (tracing) as they come.
+//! report and every model update). Derived measurements and alarms are logged (tracing) as they come.
 //!
 //! Time is each message's stamp (rig time), never the wall clock.
 
 use futures::StreamExt;
 use node_runtime::{LossWatch, RosNode, RuntimeError, Shutdown, SuiteTopic};
 use tyre_msgs::diagnostic_msgs::DiagnosticArray;
-use tyre_msgs::{DerivedMeasurement, LiveChannels, ProcedureState, QualityReport, RigSample, SweepSummary};
+use tyre_msgs::{DerivedMeasurement, LiveChannels, ModelState, ProcedureState, QualityReport, RigSample, SweepSummary};
 
 use crate::config::{ConfigError, MonitorConfig, TyreInfo};
+use crate::model_watch::ModelWatch;
 use crate::pipeline::{Pipeline, PipelineError, PipelineOutput};
 
 /// The quality node's config (`[node.config]` of a launch file with `kind = "quality"`).
@@ -109,7 +111,10 @@ pub async fn run(mut node: RosNode, cfg: QualityNodeConfig, shutdown: Shutdown) 
     let samples = node.subscription::<RigSample>(SuiteTopic::RigSample)?;
     let states = node.subscription::<ProcedureState>(SuiteTopic::ProcedureState)?;
     let mut samples = Box::pin(samples.async_stream());
+    let models = node.subscription::<ModelState>(SuiteTopic::ModelState)?;
     let mut states = Box::pin(states.async_stream());
+    let mut models = Box::pin(models.async_stream());
+    let mut watch = ModelWatch::new();
     // The late joiner's view: the current verdicts at once.
     let _ = rep_pub.publish(p.monitor.report(0.0));
     let publish = |o: PipelineOutput, live: bool| {
@@ -141,8 +146,11 @@ pub async fn run(mut node: RosNode, cfg: QualityNodeConfig, shutdown: Shutdown) 
             let _ = diag_pub.publish(d);
         }
     };
-    let (sample_topic, state_topic) =
-        (node.topic_name(SuiteTopic::RigSample), node.topic_name(SuiteTopic::ProcedureState));
+    let (sample_topic, state_topic, model_topic) = (
+        node.topic_name(SuiteTopic::RigSample),
+        node.topic_name(SuiteTopic::ProcedureState),
+        node.topic_name(SuiteTopic::ModelState),
+    );
     let mut loss = LossWatch::new(node.name());
     let mut stamp = tyre_msgs::builtin_interfaces::Time::default();
     loop {
@@ -154,6 +162,24 @@ pub async fn run(mut node: RosNode, cfg: QualityNodeConfig, shutdown: Shutdown) 
                     p.on_procedure_state(&st)
                 }
                 Some(Err(e)) => loss.on_read_error(&state_topic, &e),
+                None => break,
+            },
+            // The live fit (when one runs): its progress on the log and /diagnostics.
+            item = models.next() => match item {
+                Some(Ok((m, info))) => {
+                    loss.on_message(&model_topic, &info, None);
+                    let o = watch.on_model_state(&m);
+                    tracing::info!("{}", o.summary);
+                    for e in &o.events {
+                        if e.level == tyre_msgs::diagnostic_msgs::DiagnosticStatus::OK {
+                            tracing::info!("live model at {:.1} s: {}", e.rig_time_s, e.message);
+                        } else {
+                            tracing::warn!("live model at {:.1} s: {}", e.rig_time_s, e.message);
+                        }
+                    }
+                    let _ = diag_pub.publish(o.diagnostics);
+                }
+                Some(Err(e)) => loss.on_read_error(&model_topic, &e),
                 None => break,
             },
             item = samples.next() => match item {

@@ -65,6 +65,8 @@ pub struct Headless {
     live_fit: Option<livefit::LiveFit>,
     /// Wall time of each live-fit update after a sweep, s (the fitter's own measurement).
     live_fit_walls: Vec<f64>,
+    /// The monitor's view of the live fit (its `/diagnostics`, as the quality node's).
+    model_watch: monitor::ModelWatch,
 }
 
 impl std::fmt::Debug for Headless {
@@ -191,6 +193,7 @@ impl Headless {
             pipeline,
             live_fit: None,
             live_fit_walls: Vec::new(),
+            model_watch: monitor::ModelWatch::new(),
         })
     }
 
@@ -370,6 +373,7 @@ impl Headless {
                 let st = fit.update();
                 self.live_fit_walls.push(st.update_wall_s);
                 sink.put(t, Outgoing::Model(&st))?;
+                sink.put(t, Outgoing::Diagnostics(&self.model_watch.on_model_state(&st).diagnostics))?;
             }
 
             let out = self.seq.step(t, Some(&th.state), Some(&sample));
@@ -448,6 +452,7 @@ impl Headless {
         if let Some(fit) = self.live_fit.as_mut() {
             let st = fit.finish();
             sink.put(t_end, Outgoing::Model(&st))?;
+            sink.put(t_end, Outgoing::Diagnostics(&self.model_watch.on_model_state(&st).diagnostics))?;
         }
         if first_tyre_mounted || self.wear_true.is_empty() {
             self.wear_true.push(self.rig.truth().tread_worn_mm);
