@@ -147,7 +147,11 @@ impl ProcedureCommand {
 }
 
 /// `tyre_msgs/ProcedureState`: where the sequencer is.
-#[derive(Debug, Clone, PartialEq, Default, Serialize, Deserialize)]
+///
+/// `Deserialize` is written out so that a state recorded before `plan_reason` and
+/// `predicted_error_pct` existed still decodes (they are then empty and 0): older logs stay
+/// readable.
+#[derive(Debug, Clone, PartialEq, Default, Serialize)]
 pub struct ProcedureState {
     /// Stamp (rig time) of this state.
     pub header: Header,
@@ -173,6 +177,74 @@ pub struct ProcedureState {
     pub elapsed_rig_time_s: f64,
     /// planned sweep time left + predicted thermal pauses
     pub estimated_remaining_s: f64,
+    /// Why the step in progress runs. Empty for a fixed procedure; in an adaptive plan "fixed"
+    /// for the procedure's own steps, else the planner's reason for choosing it.
+    pub plan_reason: String,
+    /// adaptive plan: predicted held-out error after the chosen sweep \[% of peak\]; 0 otherwise
+    pub predicted_error_pct: f64,
+}
+
+impl<'de> Deserialize<'de> for ProcedureState {
+    fn deserialize<D: serde::Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
+        const FIELDS: [&str; 14] = [
+            "header",
+            "phase",
+            "procedure",
+            "section",
+            "section_index",
+            "sweep_name",
+            "sweep_index",
+            "sweep_count",
+            "sweep_started_hot",
+            "progress",
+            "elapsed_rig_time_s",
+            "estimated_remaining_s",
+            "plan_reason",
+            "predicted_error_pct",
+        ];
+        struct V;
+        impl<'de> serde::de::Visitor<'de> for V {
+            type Value = ProcedureState;
+            fn expecting(&self, f: &mut std::fmt::Formatter) -> std::fmt::Result {
+                f.write_str("tyre_msgs/ProcedureState")
+            }
+            fn visit_seq<A: serde::de::SeqAccess<'de>>(self, mut seq: A) -> Result<ProcedureState, A::Error> {
+                use serde::de::Error;
+                let mut n = 0;
+                macro_rules! field {
+                    () => {{
+                        n += 1;
+                        seq.next_element()?.ok_or_else(|| A::Error::invalid_length(n - 1, &self))?
+                    }};
+                }
+                let mut st = ProcedureState {
+                    header: field!(),
+                    phase: field!(),
+                    procedure: field!(),
+                    section: field!(),
+                    section_index: field!(),
+                    sweep_name: field!(),
+                    sweep_index: field!(),
+                    sweep_count: field!(),
+                    sweep_started_hot: field!(),
+                    progress: field!(),
+                    elapsed_rig_time_s: field!(),
+                    estimated_remaining_s: field!(),
+                    ..ProcedureState::default()
+                };
+                // Fields added later: a message that ends before them is an older one (CDR
+                // has no field markers, so "ended" shows as an error or as no element).
+                if let Ok(Some(reason)) = seq.next_element::<String>() {
+                    st.plan_reason = reason;
+                    if let Ok(Some(e)) = seq.next_element::<f64>() {
+                        st.predicted_error_pct = e;
+                    }
+                }
+                Ok(st)
+            }
+        }
+        d.deserialize_struct("ProcedureState", &FIELDS, V)
+    }
 }
 
 crate::ros_message!(

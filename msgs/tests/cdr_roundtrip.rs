@@ -87,3 +87,50 @@ fn hand_written_quality_report_round_trips() {
         assert!(from_cdr_with_header::<QualityReport>(&bytes[..cut]).is_err());
     }
 }
+
+/// `ProcedureState` as it was before `plan_reason` and `predicted_error_pct`: what older logs
+/// hold.
+#[derive(serde::Serialize)]
+struct ProcedureStateV1 {
+    header: Header,
+    phase: u8,
+    procedure: String,
+    section: String,
+    section_index: u32,
+    sweep_name: String,
+    sweep_index: u32,
+    sweep_count: u32,
+    sweep_started_hot: bool,
+    progress: f64,
+    elapsed_rig_time_s: f64,
+    estimated_remaining_s: f64,
+}
+
+#[test]
+fn a_procedure_state_from_an_older_log_still_decodes() {
+    let old = ProcedureStateV1 {
+        header: Header::iso_w(12.5),
+        phase: ProcedureState::PHASE_SWEEP,
+        procedure: "gs2mf_freerolling".into(),
+        section: "force_moment".into(),
+        section_index: 3,
+        sweep_name: "FreeRoll_sw14".into(),
+        sweep_index: 14,
+        sweep_count: 80,
+        sweep_started_hot: true,
+        progress: 0.25,
+        elapsed_rig_time_s: 900.0,
+        estimated_remaining_s: 2700.0,
+    };
+    let back: ProcedureState = from_cdr_with_header(&to_cdr_with_header(&old).unwrap()).unwrap();
+    assert_eq!((back.sweep_name.as_str(), back.sweep_index, back.estimated_remaining_s), ("FreeRoll_sw14", 14, 2700.0));
+    assert!(back.sweep_started_hot);
+    assert_eq!((back.plan_reason.as_str(), back.predicted_error_pct), ("", 0.0));
+    // A cut message is still an error, not a default.
+    let bytes = to_cdr_with_header(&old).unwrap();
+    assert!(from_cdr_with_header::<ProcedureState>(&bytes[..bytes.len() - 12]).is_err());
+    // And the new fields survive.
+    let new = ProcedureState { plan_reason: "value 0.2 %²/s".into(), predicted_error_pct: 1.4, ..back };
+    let again: ProcedureState = from_cdr_with_header(&to_cdr_with_header(&new).unwrap()).unwrap();
+    assert_eq!(again, new);
+}

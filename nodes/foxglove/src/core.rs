@@ -332,6 +332,8 @@ impl ViewCore {
             p.eta_s = st.estimated_remaining_s;
             p.eta = duration_words(st.estimated_remaining_s);
             p.sweep_started_hot = st.sweep_started_hot;
+            p.plan_reason = st.plan_reason.clone();
+            p.predicted_error_pct = st.predicted_error_pct;
         } else {
             p.phase = "no procedure state yet".to_owned();
             p.eta = duration_words(f64::NAN);

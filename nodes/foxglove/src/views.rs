@@ -123,6 +123,10 @@ pub struct ProgressView {
     /// ETA in words ("1 h 05 min").
     pub eta: String,
     pub sweep_started_hot: bool,
+    /// Why the sweep runs (`ProcedureState.plan_reason`: empty for a fixed procedure).
+    pub plan_reason: String,
+    /// Adaptive plan: predicted error after the chosen sweep [% of peak], 0 otherwise.
+    pub predicted_error_pct: f64,
     pub gate: GateView,
     pub quality_level: String,
     pub wear_mm: f64,
@@ -202,6 +206,7 @@ const PROGRESS_SCHEMA: &str = r#"{"type":"object","properties":{
 "section":{"type":"string"},"sweep_name":{"type":"string"},"sweep":{"type":"string"},"sweep_index":{"type":"integer"},
 "sweep_count":{"type":"integer"},"progress_pct":{"type":"number"},"elapsed_rig_time_s":{"type":"number"},
 "eta_s":{"type":"number"},"eta":{"type":"string"},"sweep_started_hot":{"type":"boolean"},
+"plan_reason":{"type":"string"},"predicted_error_pct":{"type":"number"},
 "gate":{"type":"object","properties":{"status":{"type":"string"},"gate_open":{"type":"boolean"},
 "filtered_temp_c":{"type":"number"},"baseline_c":{"type":"number"},"above_baseline_k":{"type":"number"},
 "predicted_wait_s":{"type":"number"},"predicted_release_s":{"type":"number"}}},

@@ -309,6 +309,12 @@ pub struct Insertion {
     pub candidate: usize,
     /// The rig's setpoint its group starts from.
     pub from: Setpoint,
+    /// Why the planner chose it (its `ProcedureState.plan_reason`; empty in older checkpoints).
+    #[serde(default)]
+    pub reason: String,
+    /// The predicted error after it, % of peak (0 in older checkpoints).
+    #[serde(default)]
+    pub error_after_pct: f64,
 }
 
 /// The adaptive plan's state inside the sequencer.
@@ -372,6 +378,9 @@ pub struct Sequencer {
     pause_model_sum_s: f64,
     /// The model's pause estimate after each step \[s\].
     pause_estimates_s: Vec<f64>,
+    /// Why each step runs, for the adaptive plan's chosen steps: (reason, predicted error after
+    /// it, % of peak); `None` for the procedure's own steps.
+    step_reasons: Vec<Option<(String, f64)>>,
     predicted_wait_s: Option<f64>,
     last_state_s: Option<f64>,
     last_state_key: Option<(u8, usize)>,
@@ -431,6 +440,7 @@ impl Sequencer {
         }
         plan.check_envelope(&cfg.envelope)?;
         let pause_estimates_s = plan.steps.iter().map(|s| cfg.pause_model.pause_after_s(s)).collect();
+        let n_steps = plan.steps.len();
         Ok(Self {
             plan,
             cfg,
@@ -449,6 +459,7 @@ impl Sequencer {
             next_started_hot: false,
             pause_sum_s: 0.0,
             pause_model_sum_s: 0.0,
+            step_reasons: vec![None; n_steps],
             pause_estimates_s,
             predicted_wait_s: None,
             last_state_s: None,
@@ -522,7 +533,7 @@ impl Sequencer {
                     ins.candidate, ins.slot
                 )));
             }
-            s.insert_candidate(ins.slot, ins.candidate, ins.from);
+            s.insert_candidate(ins.slot, ins.candidate, ins.from, ins.reason.clone(), ins.error_after_pct);
         }
         let a = s.adaptive.as_mut().expect("new_adaptive sets it");
         let lib = a.planner.library().clone();
@@ -565,8 +576,9 @@ impl Sequencer {
         a.slot_at.iter().position(|&at| at == i).filter(|&slot| !a.planner.is_closed(slot))
     }
 
-    /// Inserts candidate `id`'s group (built from `from`) before slot `slot`'s next step.
-    fn insert_candidate(&mut self, slot: usize, id: usize, from: Setpoint) {
+    /// Inserts candidate `id`'s group (built from `from`) before slot `slot`'s next step; every
+    /// step of it carries the planner's `reason` and predicted error after it.
+    fn insert_candidate(&mut self, slot: usize, id: usize, from: Setpoint, reason: String, error_after_pct: f64) {
         let Some(a) = self.adaptive.as_mut() else { return };
         let Some(cand) = a.planner.library().candidate(id) else { return };
         let mut group = cand.group(from, &a.planner.library().limits);
@@ -585,6 +597,7 @@ impl Sequencer {
         let estimates: Vec<f64> = group.iter().map(|s| self.cfg.pause_model.pause_after_s(s)).collect();
         self.plan.steps.splice(at..at, group);
         self.pause_estimates_s.splice(at..at, estimates);
+        self.step_reasons.splice(at..at, std::iter::repeat_n(Some((reason.clone(), error_after_pct)), k));
         let mut data = 0u32;
         for st in &mut self.plan.steps {
             st.sweep_index = st.kind.is_data().then(|| {
@@ -597,7 +610,7 @@ impl Sequencer {
                 *s_at += k;
             }
         }
-        a.insertions.push(Insertion { slot, candidate: id, from });
+        a.insertions.push(Insertion { slot, candidate: id, from, reason, error_after_pct });
     }
 
     /// The adaptive plan's decision at the slot it waits on, with the live model `view` (an
@@ -616,7 +629,7 @@ impl Sequencer {
         let d = a.planner.decide(slot, from, view, scale);
         match d.candidate {
             Some(id) => {
-                self.insert_candidate(slot, id, from);
+                self.insert_candidate(slot, id, from, d.reason.clone(), d.error_after_pct);
                 out.events.push(SequencerEvent::SweepChosen {
                     slot,
                     name: d.name.clone(),
@@ -1316,7 +1329,14 @@ impl Sequencer {
         } else {
             (total - done_s - in_step_s).max(0.0) + pauses_left + current_pause
         };
-        let shown = self.display_step().map(|i| &steps[i]);
+        let shown_i = self.display_step();
+        let shown = shown_i.map(|i| &steps[i]);
+        let (plan_reason, predicted_error_pct) =
+            match (&self.adaptive, shown_i.and_then(|i| self.step_reasons[i].as_ref())) {
+                (None, _) => (String::new(), 0.0),
+                (Some(_), Some((reason, err))) => (reason.clone(), *err),
+                (Some(_), None) => ("fixed".to_owned(), 0.0),
+            };
         ProcedureState {
             header: Header::iso_w(now_s),
             phase: self.phase(),
@@ -1330,6 +1350,8 @@ impl Sequencer {
             progress: ((done_s + in_step_s) / total).clamp(0.0, 1.0),
             elapsed_rig_time_s: self.elapsed_at(now_s),
             estimated_remaining_s: remaining,
+            plan_reason,
+            predicted_error_pct,
         }
     }
 

@@ -207,3 +207,36 @@ fn a_checkpoint_mid_slot_resumes_with_the_same_decisions() {
     let fixed = Sequencer::new(plan.clone(), SequencerConfig::default()).unwrap().checkpoint();
     assert!(Sequencer::resume_for_config(plan, cfg(), &fixed).is_err());
 }
+
+#[test]
+fn the_procedure_state_says_why_a_chosen_sweep_runs_and_what_error_it_predicts() {
+    let plan = gs2mf();
+    let mut seq = Sequencer::for_config(plan.clone(), cfg()).unwrap();
+    let first = start(&mut seq, 0.0);
+    assert!(!first.is_empty());
+    // The fixed steps before the first slot: "fixed", no prediction.
+    let st = seq.procedure_state(1.0);
+    assert_eq!((st.plan_reason.as_str(), st.predicted_error_pct), ("fixed", 0.0));
+    let (t, _) = drive(&mut seq, 0.0, 0);
+    let out = seq.plan_next(t, &Synth::new());
+    let (reason, after) = out
+        .events
+        .iter()
+        .find_map(|e| match e {
+            SequencerEvent::SweepChosen { reason, error_after_pct, .. } => Some((reason.clone(), *error_after_pct)),
+            _ => None,
+        })
+        .expect("the first slot chooses a sweep");
+    assert!(!reason.is_empty() && after > 0.0, "{reason} {after}");
+    let st = out.state.expect("a decision publishes the state");
+    assert_eq!((st.plan_reason.as_str(), st.predicted_error_pct), (reason.as_str(), after));
+    // The checkpoint keeps the reason, so a resumed run says the same.
+    let cp: Checkpoint = serde_json::from_str(&serde_json::to_string(&seq.checkpoint()).unwrap()).unwrap();
+    let ins = &cp.adaptive.as_ref().unwrap().insertions[0];
+    // (JSON keeps the number to within a unit in the last place.)
+    assert_eq!(ins.reason, reason);
+    assert!((ins.error_after_pct - after).abs() <= 1e-12 * after, "{} vs {after}", ins.error_after_pct);
+    // A fixed procedure's states carry no plan reason.
+    let fixed = Sequencer::new(plan, SequencerConfig::default()).unwrap();
+    assert_eq!(fixed.procedure_state(0.0).plan_reason, "");
+}
