@@ -232,13 +232,16 @@ topics = ["procedure/command"]
 
     def command(keystore: Path, station: str, operator: str, timeout_s: float) -> subprocess.Popen:
         log = tmp_path / f"{operator}.log"
+        # Without a backtrace the station's error is its one-line reason, which a failed
+        # assertion below prints whole.
+        env = {k: v for k, v in os.environ.items() if k not in ("RUST_BACKTRACE", "RUST_LIB_BACKTRACE")}
         return subprocess.Popen(
             [str(tyrerig), "command", "start", "--keystore", str(keystore), "--enclave", station,
              "--operator", operator, "--domain-id", str(domain_id), "--timeout-s", str(timeout_s)],
-            stdout=open(log.with_suffix(".out"), "w"), stderr=open(log, "w"))
+            stdout=open(log.with_suffix(".out"), "w"), stderr=open(log, "w"), env=env)
 
     def result(operator: str, p: subprocess.Popen) -> tuple:
-        rc = p.wait(timeout=60)
+        rc = p.wait(timeout=90)
         log = tmp_path / f"{operator}.log"
         return rc, log.with_suffix(".out").read_text(), log.read_text()
 
@@ -248,8 +251,8 @@ topics = ["procedure/command"]
     stranger = DataWriter(dp, Topic(dp, "rt/rig/procedure/command", types["ProcedureCommand"]), qos=qos)
     try:
         stations = {
-            "operator": command(ours, "/rig/operator_1", "operator", 30),
-            "viewer": command(ours, "/rig/viewer", "viewer", 30),
+            "operator": command(ours, "/rig/operator_1", "operator", 60),
+            "viewer": command(ours, "/rig/viewer", "viewer", 60),
             "other keystore": command(theirs, "/rig/operator_1", "stranger-with-a-certificate", 12),
         }
         for _ in range(50):
