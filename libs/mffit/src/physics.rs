@@ -138,6 +138,19 @@ fn slip_stiffness(params: &TyreParams, grid: &Grid, fz: f64, g: f64, p: f64, lat
     (f(small) - f(-small)) / (2.0 * small)
 }
 
+/// Combined-slip and pure force (FY when `lateral`, else FX) at every input, by the batch kernel.
+fn combined_and_pure(params: &TyreParams, inputs: &[mftyre::MfInput], lateral: bool) -> (Vec<f64>, Vec<f64>) {
+    use crate::engine::{BatchScratch, Channel, InputColumns};
+    let cols = InputColumns::of_inputs(inputs);
+    let batch = cols.batch(0..inputs.len());
+    let mut scratch = BatchScratch::default();
+    let (mut combined, mut pure) = (vec![0.0; inputs.len()], vec![0.0; inputs.len()]);
+    let (c, p) = if lateral { (Channel::Fy, Channel::Fy0) } else { (Channel::Fx, Channel::Fx0) };
+    c.eval_batch(params, &batch, &mut scratch, &mut combined);
+    p.eval_batch(params, &batch, &mut scratch, &mut pure);
+    (combined, pure)
+}
+
 /// The margins of one set; `described` = with descriptions (for findings), else values only
 /// (for penalties, evaluated thousands of times per fit).
 fn margins_of(params: &TyreParams, set: MarginSet, grid: &Grid, described: bool) -> Vec<Margin> {
@@ -244,6 +257,9 @@ fn margins_of(params: &TyreParams, set: MarginSet, grid: &Grid, described: bool)
             let conditions = loads
                 .iter()
                 .flat_map(|&fz| grid.gamma_rad.iter().flat_map(move |&g| grid.p_pa.iter().map(move |&p| (fz, g, p))));
+            // Every check point first, in load-case runs, so the batch kernel evaluates them
+            // together (these margins are penalty residuals: every Jacobian column pays them).
+            let mut points = Vec::new();
             for (fz, gam, p) in conditions {
                 for ia in 1..=3 {
                     let a = a_max * ia as f64 / 3.0;
@@ -253,37 +269,35 @@ fn margins_of(params: &TyreParams, set: MarginSet, grid: &Grid, described: bool)
                         }
                         let k = k_max * ik as f64 / 3.0;
                         for sa in [-a, a] {
-                            let i = grid.input(fz, k, sa, gam, p);
-                            let o = mftyre::evaluate(params, UseMode::M211, &i);
-                            let (f, f0) = if lateral {
-                                (o.fy_n, mftyre::pure_fy(params, UseMode::M211, &i))
-                            } else {
-                                (o.fx_n, mftyre::pure_fx(params, UseMode::M211, &i))
-                            };
-                            // The pure force must be clearly there to judge a ratio; where it is not,
-                            // the two margins count as held (the number of margins stays fixed, as
-                            // penalty residuals need).
-                            if !f0.is_finite() || f0.abs() < 0.05 * fz {
-                                push(1.0, &|| String::new());
-                                push(1.0, &|| String::new());
-                                continue;
-                            }
-                            let ratio = if f.is_finite() { f / f0 } else { -1.0 };
-                            let what = |kind: &str| {
-                                format!(
-                                    "{kind}: combined {} {f:.0} N vs pure {f0:.0} N at SA {:.1} deg, SR {k:.3}, {}",
-                                    if lateral { "FY" } else { "FX" },
-                                    sa.to_degrees(),
-                                    at(fz, gam, p)
-                                )
-                            };
-                            // G ≤ 1 (2 % tolerance for the shifts), and G ≥ 0: combined slip
-                            // weakens a force, never strengthens or reverses it.
-                            push(1.02 - ratio, &|| what("G > 1"));
-                            push(ratio, &|| what("G < 0"));
+                            points.push((fz, gam, p, k, sa));
                         }
                     }
                 }
+            }
+            let inputs: Vec<_> = points.iter().map(|&(fz, gam, p, k, sa)| grid.input(fz, k, sa, gam, p)).collect();
+            let (combined, pure) = combined_and_pure(params, &inputs, lateral);
+            for (((fz, gam, p, k, sa), f), f0) in points.into_iter().zip(combined).zip(pure) {
+                // The pure force must be clearly there to judge a ratio; where it is not,
+                // the two margins count as held (the number of margins stays fixed, as
+                // penalty residuals need).
+                if !f0.is_finite() || f0.abs() < 0.05 * fz {
+                    push(1.0, &|| String::new());
+                    push(1.0, &|| String::new());
+                    continue;
+                }
+                let ratio = if f.is_finite() { f / f0 } else { -1.0 };
+                let what = |kind: &str| {
+                    format!(
+                        "{kind}: combined {} {f:.0} N vs pure {f0:.0} N at SA {:.1} deg, SR {k:.3}, {}",
+                        if lateral { "FY" } else { "FX" },
+                        sa.to_degrees(),
+                        at(fz, gam, p)
+                    )
+                };
+                // G ≤ 1 (2 % tolerance for the shifts), and G ≥ 0: combined slip
+                // weakens a force, never strengthens or reverses it.
+                push(1.02 - ratio, &|| what("G > 1"));
+                push(ratio, &|| what("G < 0"));
             }
         }
     }

@@ -14,7 +14,7 @@
 
 use mftyre::MfInput;
 
-use crate::engine::{Channel, values_of};
+use crate::engine::{BatchScratch, Channel, InputColumns, values_of};
 use crate::stages::FitResult;
 
 /// The operating-envelope grid the prediction uncertainty is mapped on. Fixed for a run (it
@@ -256,24 +256,56 @@ impl ChannelCovariance {
         var.max(0.0).sqrt()
     }
 
-    /// σ at every input, on `threads` threads (each point is 2 model runs per key: the maps are
-    /// the live fit's second biggest cost after the stages).
-    fn stds(&self, result: &FitResult, channel: MapChannel, inputs: &[MfInput], threads: usize) -> Vec<f64> {
+    /// σ at every point of `grid`, on `threads` threads: per coefficient, the channel over the
+    /// whole grid at ±h by the batch kernel (each point is 2 model runs per key: the maps are
+    /// the live fit's second biggest cost after the stages), then gᵀ Σ g per point.
+    fn stds(&self, result: &FitResult, channel: MapChannel, grid: &GridBatch, threads: usize) -> Vec<f64> {
+        let ch = channel.channel();
         let base = values_of(&result.params, &self.keys);
-        let mut out = vec![0.0; inputs.len()];
-        let chunk = inputs.len().div_ceil(threads.max(1)).max(1);
+        let n_keys = self.keys.len();
+        let n = grid.len();
+        // g[key][point] = ∂y/∂key at the point.
+        let mut g = vec![vec![0.0; n]; n_keys];
+        let per_thread = n_keys.div_ceil(threads.max(1)).max(1);
         std::thread::scope(|s| {
-            for (o, x) in out.chunks_mut(chunk).zip(inputs.chunks(chunk)) {
+            for (t, rows) in g.chunks_mut(per_thread).enumerate() {
                 let base = &base;
                 s.spawn(move || {
-                    let mut scratch = result.params.clone();
-                    for (o, x) in o.iter_mut().zip(x) {
-                        *o = self.std_with(&mut scratch, base, channel, x);
+                    let mut p = result.params.clone();
+                    let mut scratch = BatchScratch::default();
+                    let (mut up, mut down) = (vec![0.0; n], vec![0.0; n]);
+                    for (r, row) in rows.iter_mut().enumerate() {
+                        let i = t * per_thread + r;
+                        let key = self.keys[i];
+                        let h = 1e-6 * base[i].abs().max(1e-3);
+                        let _ = p.set(key, base[i] + h);
+                        grid.eval(ch, &p, &mut scratch, &mut up);
+                        let _ = p.set(key, base[i] - h);
+                        grid.eval(ch, &p, &mut scratch, &mut down);
+                        let _ = p.set(key, base[i]);
+                        for (o, (u, d)) in row.iter_mut().zip(up.iter().zip(&down)) {
+                            *o = (u - d) / (2.0 * h);
+                        }
                     }
                 });
             }
         });
-        out
+        (0..n)
+            .map(|x| {
+                let mut var = 0.0;
+                for (a, ga) in g.iter().map(|row| row[x]).enumerate() {
+                    if ga == 0.0 {
+                        continue;
+                    }
+                    for (b, gb) in g.iter().map(|row| row[x]).enumerate() {
+                        if gb != 0.0 {
+                            var += ga * self.cov[a * n_keys + b] * gb;
+                        }
+                    }
+                }
+                var.max(0.0).sqrt()
+            })
+            .collect()
     }
 
     /// True when `other` is the same covariance of the same keys at the same fitted values.
@@ -282,6 +314,44 @@ impl ChannelCovariance {
             && self.cov == other.cov
             && self.residual_rmse.to_bits() == other.residual_rmse.to_bits()
             && values_of(&result.params, &self.keys) == values_of(&other_result.params, &other.keys)
+    }
+}
+
+/// A grid's points for the batch kernel, ordered so that each load case (load, camber,
+/// pressure) is one run of points: the kernel computes a load case's terms once per run.
+#[derive(Debug)]
+struct GridBatch {
+    columns: InputColumns,
+    /// `order[k]`: the grid index of the k-th point of `columns`.
+    order: Vec<usize>,
+}
+
+impl GridBatch {
+    fn of(inputs: &[MfInput]) -> Self {
+        let mut order: Vec<usize> = (0..inputs.len()).collect();
+        let case = |i: &MfInput| [i.fz_n, i.gamma_rad, i.p_pa];
+        order.sort_by(|&a, &b| {
+            case(&inputs[a])
+                .iter()
+                .zip(case(&inputs[b]).iter())
+                .fold(std::cmp::Ordering::Equal, |o, (x, y)| o.then(x.total_cmp(y)))
+        });
+        let sorted: Vec<MfInput> = order.iter().map(|&i| inputs[i]).collect();
+        GridBatch { columns: InputColumns::of_inputs(&sorted), order }
+    }
+
+    fn len(&self) -> usize {
+        self.order.len()
+    }
+
+    /// `channel` at every grid point, into `out` in grid order.
+    fn eval(&self, channel: Channel, params: &mftyre::TyreParams, scratch: &mut BatchScratch, out: &mut [f64]) {
+        let n = self.len();
+        let mut sorted = vec![0.0; n];
+        channel.eval_batch(params, &self.columns.batch(0..n), scratch, &mut sorted);
+        for (v, &i) in sorted.iter().zip(&self.order) {
+            out[i] = *v;
+        }
     }
 }
 
@@ -305,8 +375,9 @@ pub fn prediction_maps_since(
         .iter()
         .map(|&channel| {
             let inputs = grid.inputs(channel, result.nominal.r0_m);
-            let ch = channel.channel();
-            let value: Vec<f64> = inputs.iter().map(|x| ch.eval(&result.params, x)).collect();
+            let batch = GridBatch::of(&inputs);
+            let mut value = vec![0.0; inputs.len()];
+            batch.eval(channel.channel(), &result.params, &mut BatchScratch::default(), &mut value);
             let Some(c) = ChannelCovariance::of(result, channel) else {
                 return PredictionMap { channel, value, std: vec![f64::NAN; inputs.len()], residual_rmse: f64::NAN };
             };
@@ -318,7 +389,7 @@ pub fn prediction_maps_since(
                     && m.value.iter().zip(&value).all(|(a, b)| a.to_bits() == b.to_bits());
                 same.then(|| m.std.clone())
             });
-            let std = unchanged.unwrap_or_else(|| c.stds(result, channel, &inputs, threads));
+            let std = unchanged.unwrap_or_else(|| c.stds(result, channel, &batch, threads));
             PredictionMap { channel, value, std, residual_rmse: c.residual_rmse() }
         })
         .collect()
@@ -358,6 +429,7 @@ pub fn coverage(
         nominal: result.nominal.clone(),
         settings: crate::fit::StepSettings::default(),
         grid: crate::physics::Grid::of_range(&result.params, &result.range),
+        resampled: crate::stages::context::Resampled::of(other),
     };
     let mut out = Vec::new();
     for channel in MapChannel::ALL {

@@ -34,6 +34,44 @@ fn grid_points(t: &TyreParams, channel: Channel) -> Vec<Point> {
     v
 }
 
+/// The fitter evaluates residuals with the batch kernel; each channel must read the same value
+/// as the scalar model, including with the pressure and spin columns filled and at zero speed.
+#[test]
+fn batch_residual_channels_agree_with_the_scalar_model() {
+    use mffit::engine::{BatchScratch, InputColumns};
+    let t = truth();
+    let all = [
+        Channel::Fy0,
+        Channel::Fx0,
+        Channel::Mz0,
+        Channel::Fx,
+        Channel::Fy,
+        Channel::Mz,
+        Channel::Mx,
+        Channel::Rl,
+        Channel::Re,
+        Channel::Cx,
+        Channel::SigmaY,
+    ];
+    let mut pts = grid_points(&t, Channel::Fy);
+    // A point with another pressure and a measured spin rate, and one at standstill.
+    pts[3].input.p_pa = 1.9e5;
+    pts[4].input.omega_radps = 50.0;
+    pts[5].input.vx_mps = 0.0;
+    let cols = InputColumns::of(&pts);
+    let mut scratch = BatchScratch::default();
+    for channel in all {
+        let mut batch = vec![0.0; pts.len() - 1];
+        // An odd range: a partial lane group at the end.
+        channel.eval_batch(&t, &cols.batch(1..pts.len()), &mut scratch, &mut batch);
+        for (i, b) in batch.iter().enumerate() {
+            let scalar = channel.eval(&t, &pts[i + 1].input);
+            let tol = 1e-12 * scalar.abs().max(1.0);
+            assert!((b - scalar).abs() <= tol, "{channel:?} point {}: batch {b} vs scalar {scalar}", i + 1);
+        }
+    }
+}
+
 #[test]
 fn numeric_jacobians_agree_with_lsq_finite_differences() {
     let t = truth();
@@ -171,4 +209,32 @@ fn robust_loss_resists_outliers() {
     let plain = err(None);
     let robust = err(Some(2.0));
     assert!(robust < 0.2 * plain, "robust {robust} vs plain {plain}");
+}
+
+/// The maps evaluate the grid in load-case order with the batch kernel; every value and σ must
+/// still be the one the scalar model gives at that grid point.
+#[test]
+fn prediction_maps_match_the_scalar_delta_method_point_by_point() {
+    use mffit::prediction::{ChannelCovariance, EnvelopeGrid, MapChannel, prediction_maps_since};
+    let d = small_dataset(Noise::RIG);
+    let result = fit(&d, &FitOptions { folds: 0, ..FitOptions::default() }).expect("fit");
+    let n = &result.nominal;
+    let grid = EnvelopeGrid::standard(n.fz0_n, n.p0_pa, n.v0_mps);
+    let maps = prediction_maps_since(&result, &grid, None, 2);
+    assert_eq!(maps.len(), MapChannel::ALL.len());
+    for map in &maps {
+        let cov = ChannelCovariance::of(&result, map.channel).expect("every stage fitted");
+        let inputs = grid.inputs(map.channel, n.r0_m);
+        for i in (0..inputs.len()).step_by(7) {
+            let value = map.channel.channel().eval(&result.params, &inputs[i]);
+            assert!((map.value[i] - value).abs() <= 1e-12 * value.abs().max(1.0), "{:?} #{i}", map.channel);
+            let sd = cov.std_at(&result, map.channel, &inputs[i]);
+            assert!(
+                (map.std[i] - sd).abs() <= 1e-5 * sd.abs() + 1e-9,
+                "{:?} #{i}: map σ {} vs scalar σ {sd}",
+                map.channel,
+                map.std[i]
+            );
+        }
+    }
 }

@@ -37,7 +37,9 @@ pub struct LiveFit {
     /// The latest sample, held back until the states stamped at or before it have arrived (the
     /// sequencer publishes the state of time t after the sample of time t).
     pending: Option<RigSample>,
-    data: Dataset,
+    /// Shared with the update in flight, if any: a segment completing while an update runs
+    /// copies the data once (`Arc::make_mut`); otherwise an update costs no copy of it.
+    data: Arc<Dataset>,
     /// Segments completed since the last update.
     new_segments: usize,
     last_segment: String,
@@ -62,7 +64,7 @@ impl LiveFit {
             states: VecDeque::new(),
             current: None,
             pending: None,
-            data,
+            data: Arc::new(data),
             new_segments: 0,
             last_segment: String::new(),
             stamp: Time::default(),
@@ -112,7 +114,7 @@ impl LiveFit {
             self.new_segments += 1;
             self.last_segment = format!("{}/{}", seg.section, seg.sweep);
         }
-        self.data.segments.push(seg);
+        Arc::make_mut(&mut self.data).segments.push(seg);
     }
 
     /// True when a segment has completed since the last update.
@@ -229,7 +231,7 @@ impl LiveFit {
 pub struct UpdateJob {
     /// The previous fit and its maps: the maps of channels it left unchanged are taken over.
     previous: Option<(Arc<FitResult>, Vec<PredictionMap>)>,
-    data: Dataset,
+    data: Arc<Dataset>,
     opts: mffit::FitOptions,
     grid: Option<EnvelopeGrid>,
     p0_pa: Option<f64>,
@@ -262,6 +264,7 @@ impl UpdateJob {
 
     /// Fits and maps the uncertainty.
     pub fn run(self) -> UpdateDone {
+        let started = std::time::Instant::now();
         let mut result = mffit::fit(&self.data, &self.opts);
         let why = if self.final_update {
             Some("final model".to_owned())
@@ -273,15 +276,15 @@ impl UpdateJob {
         }
         let mut grid = self.grid;
         let mut maps = Vec::new();
-        let mut wall_s = 0.0;
         if let Ok(r) = &result {
             let n = &r.nominal;
             let g =
                 grid.get_or_insert_with(|| EnvelopeGrid::standard(n.fz0_n, self.p0_pa.unwrap_or(n.p0_pa), n.v0_mps));
             let previous = self.previous.as_ref().map(|(p, m)| (p.as_ref(), m.as_slice()));
             maps = prediction_maps_since(r, g, previous, self.opts.threads);
-            wall_s = r.wall_s;
         }
+        // The whole update: the fit, the fresh-fit comparison when one ran, and the maps.
+        let wall_s = started.elapsed().as_secs_f64();
         let segs = &self.data.segments;
         UpdateDone {
             result: result.map_err(|e| e.to_string()),

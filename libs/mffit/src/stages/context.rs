@@ -23,6 +23,24 @@ pub struct Ctx<'a> {
     pub settings: StepSettings,
     /// The tested range's grid, where physical margins are checked.
     pub grid: Grid,
+    /// Each segment resampled, computed once per fit (every stage selects from them).
+    pub resampled: Resampled,
+}
+
+/// Each segment of a dataset resampled at its period, computed on first use: the stages select
+/// their points from the same resampled segments, and resampling all data once per stage was a
+/// large part of a live update.
+#[derive(Debug, Default)]
+pub struct Resampled {
+    /// Per segment: the period and the resampled samples.
+    cells: Vec<std::sync::OnceLock<(f64, Vec<Sample>)>>,
+}
+
+impl Resampled {
+    /// An empty cache for the segments of `data`.
+    pub fn of(data: &Dataset) -> Self {
+        Resampled { cells: (0..data.segments.len()).map(|_| std::sync::OnceLock::new()).collect() }
+    }
 }
 
 /// A stage's points and the segment (index into the dataset) each came from.
@@ -150,6 +168,23 @@ impl Ctx<'_> {
         if seg.procedure == Procedure::BrkDrv { self.opts.brkdrv_period_s } else { self.opts.resample_period_s }
     }
 
+    /// Segment `i` of the data, resampled at its period ([`resample`]).
+    pub fn resampled(&self, i: usize) -> std::borrow::Cow<'_, [Sample]> {
+        let seg = &self.data.segments[i];
+        let period = self.period_of(seg);
+        match self.resampled.cells.get(i) {
+            Some(cell) => {
+                let (at, samples) = cell.get_or_init(|| (period, resample(&seg.samples, period)));
+                if at.to_bits() == period.to_bits() {
+                    std::borrow::Cow::Borrowed(samples)
+                } else {
+                    std::borrow::Cow::Owned(resample(&seg.samples, period))
+                }
+            }
+            None => std::borrow::Cow::Owned(resample(&seg.samples, period)),
+        }
+    }
+
     /// Samples of the segments matching `keep_seg` that satisfy `keep`, resampled per segment,
     /// as points measuring `measured`, evenly decimated to `max`.
     pub fn points(
@@ -162,7 +197,7 @@ impl Ctx<'_> {
         let mut out = StagePoints::default();
         for (i, seg) in self.data.segments.iter().enumerate().filter(|(_, s)| keep_seg(s)) {
             let free = seg.procedure == Procedure::FreeRolling;
-            for s in resample(&seg.samples, self.period_of(seg)).iter().filter(|s| keep(s) && s.fz_n > 50.0) {
+            for s in self.resampled(i).iter().filter(|s| keep(s) && s.fz_n > 50.0) {
                 let m = measured(s);
                 if m.is_finite() && s.fz_n.is_finite() && s.alpha_rad.is_finite() && s.kappa.is_finite() {
                     out.points.push(Point { input: input_of(s, free), measured: m });
@@ -179,10 +214,11 @@ impl Ctx<'_> {
         self.data
             .segments
             .iter()
-            .filter(|s| keep_seg(s))
-            .map(|seg| {
+            .enumerate()
+            .filter(|(_, s)| keep_seg(s))
+            .map(|(i, seg)| {
                 let free = seg.procedure == Procedure::FreeRolling;
-                resample(&seg.samples, self.period_of(seg))
+                self.resampled(i)
                     .iter()
                     .filter(|s| s.fz_n > 50.0)
                     .map(|s| Point { input: input_of(s, free), measured: measured(s) })
@@ -195,8 +231,8 @@ impl Ctx<'_> {
     /// operating point: σ ≈ median|Δ| / (0.6745·√2).
     pub fn noise_floor(&self, keep_seg: impl Fn(&Segment) -> bool, measured: fn(&Sample) -> f64) -> f64 {
         let mut d = Vec::new();
-        for seg in self.data.segments.iter().filter(|s| keep_seg(s)) {
-            let rs = resample(&seg.samples, self.period_of(seg));
+        for (i, _) in self.data.segments.iter().enumerate().filter(|(_, s)| keep_seg(s)) {
+            let rs = self.resampled(i);
             for w in rs.windows(2) {
                 if (w[1].alpha_rad - w[0].alpha_rad).abs() < 0.05f64.to_radians()
                     && (w[1].kappa - w[0].kappa).abs() < 0.002

@@ -139,6 +139,7 @@ pub fn validate(result: &FitResult, other: &Dataset, opts: &FitOptions) -> Vec<V
         nominal: result.nominal.clone(),
         settings: crate::fit::StepSettings::default(),
         grid: crate::physics::Grid::of_range(&result.params, &result.range),
+        resampled: crate::stages::context::Resampled::of(other),
     };
     let mut out = Vec::new();
     for stage in STAGES {

@@ -35,7 +35,7 @@ mod radius;
 mod relaxation;
 pub mod steps;
 
-pub use context::{Ctx, StagePoints};
+pub use context::{Ctx, Resampled, StagePoints};
 pub use crossval::{HeldOut, ValidationRow, validate};
 pub use nominal::{Nominal, nominal_values};
 pub use relaxation::{static_stiffness, step_steer_length};
@@ -136,7 +136,8 @@ impl WarmStart {
                 let d = result.data.iter().find(|d| d.stage == r.stage)?;
                 let keys = r.keys.iter().cloned().chain(r.held.iter().map(|h| h.key.clone()));
                 let values = keys.filter_map(|k| result.params.get(&k).map(|v| (k, v))).collect();
-                Some((r.clone(), signature(&d.points), values))
+                let model = model_signature(d.channel, &result.params, &d.points);
+                Some((r.clone(), signature(&d.points), values, model))
             })
             .collect();
         let jacobian_held = result
@@ -171,7 +172,7 @@ impl WarmStart {
 
     /// The previous report and values of `stage` when its points had `sig`.
     fn reusable(&self, stage: &str, sig: u64) -> Option<&Reusable> {
-        self.reuse.iter().find(|(r, s, _)| r.stage == stage && *s == sig)
+        self.reuse.iter().find(|(r, s, _, _)| r.stage == stage && *s == sig)
     }
 
     /// This warm start, remembering the most levels of each stage that `older` (the warm start
@@ -211,7 +212,7 @@ impl WarmStart {
             .iter()
             .find(|(s, _)| s == stage)
             .map(|(_, v)| *v)
-            .or_else(|| self.reuse.iter().find(|(r, _, _)| r.stage == stage).map(|(r, _, _)| r.nrmse_pct()))
+            .or_else(|| self.reuse.iter().find(|(r, _, _, _)| r.stage == stage).map(|(r, _, _, _)| r.nrmse_pct()))
             .filter(|v| v.is_finite())
     }
 
@@ -221,8 +222,32 @@ impl WarmStart {
     }
 }
 
-/// A stage's previous report, the signature of its points and the values it set.
-type Reusable = (StageReport, u64, Vec<(String, f64)>);
+/// A stage's previous report, the signature of its points, the values it set, and the
+/// signature of the model's values at its points.
+type Reusable = (StageReport, u64, Vec<(String, f64)>, u64);
+
+/// Stages that fit one model channel on the points they select and nothing else (the radius
+/// stage fits Re on other points too, the relaxation stage Cx): for them, unchanged points and
+/// unchanged model values there mean an unchanged problem.
+const ONE_CHANNEL_STAGES: [&str; 7] =
+    ["fy_pure", "mz_pure", "fx_pure", "fx_combined", "fy_combined", "mz_combined", "mx"];
+
+/// A fingerprint of `channel`'s model values at `points` (bit for bit): a stage whose points
+/// and model values are unchanged after an upstream stage was refitted depends on nothing that
+/// refit moved (Mx on free-rolling data does not see the Fx stages), so its previous solution
+/// stands.
+fn model_signature(channel: Channel, params: &TyreParams, points: &[Point]) -> u64 {
+    use std::hash::{Hash, Hasher};
+    let cols = crate::engine::InputColumns::of(points);
+    let mut values = vec![0.0; points.len()];
+    channel.eval_batch(params, &cols.batch(0..points.len()), &mut crate::engine::BatchScratch::default(), &mut values);
+    let mut h = std::collections::hash_map::DefaultHasher::new();
+    values.len().hash(&mut h);
+    for v in values {
+        v.to_bits().hash(&mut h);
+    }
+    h.finish()
+}
 
 /// A fingerprint of a stage's points (every input and measured value, bit for bit).
 fn signature(points: &[crate::engine::Point]) -> u64 {
@@ -472,7 +497,7 @@ pub fn fit(data: &Dataset, opts: &FitOptions) -> Result<FitResult, FitError> {
     let settings =
         StepSettings { robust: opts.robust_pct, max_iterations: opts.max_iterations, threads: opts.threads.max(1) };
     let grid = Grid::of_range(&params, &range);
-    let ctx = Ctx { data, opts, nominal: nominal.clone(), settings, grid };
+    let ctx = Ctx { data, opts, nominal: nominal.clone(), settings, grid, resampled: Resampled::of(data) };
     let mut stages = Vec::new();
     let mut stage_data = Vec::new();
     let mut nom = StageReport::new("nominal", "-");
@@ -498,11 +523,21 @@ pub fn fit(data: &Dataset, opts: &FitOptions) -> Result<FitResult, FitError> {
         }
         let selection = stage.select(&ctx).unwrap_or_default();
         rep.peak = context::peak_abs(&selection.points);
-        // Unchanged points after unchanged stages: the previous result stands.
+        // Unchanged points after unchanged stages, or unchanged points and unchanged model
+        // values there after a refit upstream: the previous result stands.
         let sig = signature(&selection.points);
-        if let Some((prev, _, values)) =
-            opts.warm_start.as_ref().filter(|_| unchanged_so_far).and_then(|w| w.reusable(stage.name(), sig))
-        {
+        let reusable =
+            opts.warm_start.as_ref().and_then(|w| w.reusable(stage.name(), sig)).filter(|(_, _, values, model)| {
+                unchanged_so_far
+                    || ONE_CHANNEL_STAGES.contains(&stage.name()) && {
+                        let mut trial = params.clone();
+                        for (k, v) in values {
+                            let _ = trial.set(k, *v);
+                        }
+                        model_signature(stage.channel(), &trial, &selection.points) == *model
+                    }
+            });
+        if let Some((prev, _, values, _)) = reusable {
             for (k, v) in values {
                 let _ = params.set(k, *v);
             }
@@ -529,6 +564,7 @@ pub fn fit(data: &Dataset, opts: &FitOptions) -> Result<FitResult, FitError> {
             nominal: nominal.clone(),
             settings,
             grid: ctx.grid.clone(),
+            resampled: Resampled::of(data),
         });
         let stage_ctx = match (&cold_ctx, warm) {
             (Some(cold), false) => {

@@ -46,9 +46,9 @@ impl Radius {
                 continue;
             }
             let free = seg.procedure == Procedure::FreeRolling;
-            for s in crate::data::resample(&seg.samples, ctx.period_of(seg)) {
-                if near_free(seg, &s) && s.rl_m > 0.0 && s.vx_mps > 1.0 && s.fz_n > 50.0 && s.rl_m.is_finite() {
-                    sel.points.push(Point { input: crate::stages::context::input_of(&s, free), measured: s.rl_m });
+            for s in ctx.resampled(i).iter() {
+                if near_free(seg, s) && s.rl_m > 0.0 && s.vx_mps > 1.0 && s.fz_n > 50.0 && s.rl_m.is_finite() {
+                    sel.points.push(Point { input: crate::stages::context::input_of(s, free), measured: s.rl_m });
                     sel.groups.push(i);
                 }
             }
