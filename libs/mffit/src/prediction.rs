@@ -234,7 +234,7 @@ impl ChannelCovariance {
         let n = self.keys.len();
         let mut g = vec![0.0; n];
         for (i, key) in self.keys.iter().enumerate() {
-            let h = 1e-6 * base[i].abs().max(1e-3);
+            let h = Self::step(base[i]);
             let _ = p.set(key, base[i] + h);
             let up = ch.eval(p, input);
             let _ = p.set(key, base[i] - h);
@@ -242,18 +242,24 @@ impl ChannelCovariance {
             let _ = p.set(key, base[i]);
             g[i] = (up - down) / (2.0 * h);
         }
+        self.std_of_gradient(&g)
+    }
+
+    /// √(gᵀ Σ g) for the gradient `g` of a prediction with respect to the keys.
+    fn std_of_gradient(&self, g: &[f64]) -> f64 {
+        let n = self.keys.len();
         let mut var = 0.0;
-        for a in 0..n {
-            if g[a] == 0.0 {
-                continue;
-            }
-            for b in 0..n {
-                if g[b] != 0.0 {
-                    var += g[a] * self.cov[a * n + b] * g[b];
-                }
+        for (a, &ga) in g.iter().enumerate().filter(|(_, v)| **v != 0.0) {
+            for (b, &gb) in g.iter().enumerate().filter(|(_, v)| **v != 0.0) {
+                var += ga * self.cov[a * n + b] * gb;
             }
         }
         var.max(0.0).sqrt()
+    }
+
+    /// The central-difference step of a key at fitted value `v`.
+    fn step(v: f64) -> f64 {
+        1e-6 * v.abs().max(1e-3)
     }
 
     /// σ at every point of `grid`, on `threads` threads: per coefficient, the channel over the
@@ -277,7 +283,7 @@ impl ChannelCovariance {
                     for (r, row) in rows.iter_mut().enumerate() {
                         let i = t * per_thread + r;
                         let key = self.keys[i];
-                        let h = 1e-6 * base[i].abs().max(1e-3);
+                        let h = Self::step(base[i]);
                         let _ = p.set(key, base[i] + h);
                         grid.eval(ch, &p, &mut scratch, &mut up);
                         let _ = p.set(key, base[i] - h);
@@ -290,22 +296,7 @@ impl ChannelCovariance {
                 });
             }
         });
-        (0..n)
-            .map(|x| {
-                let mut var = 0.0;
-                for (a, ga) in g.iter().map(|row| row[x]).enumerate() {
-                    if ga == 0.0 {
-                        continue;
-                    }
-                    for (b, gb) in g.iter().map(|row| row[x]).enumerate() {
-                        if gb != 0.0 {
-                            var += ga * self.cov[a * n_keys + b] * gb;
-                        }
-                    }
-                }
-                var.max(0.0).sqrt()
-            })
-            .collect()
+        (0..n).map(|x| self.std_of_gradient(&g.iter().map(|row| row[x]).collect::<Vec<_>>())).collect()
     }
 
     /// True when `other` is the same covariance of the same keys at the same fitted values.
@@ -331,10 +322,8 @@ impl GridBatch {
         let mut order: Vec<usize> = (0..inputs.len()).collect();
         let case = |i: &MfInput| [i.fz_n, i.gamma_rad, i.p_pa];
         order.sort_by(|&a, &b| {
-            case(&inputs[a])
-                .iter()
-                .zip(case(&inputs[b]).iter())
-                .fold(std::cmp::Ordering::Equal, |o, (x, y)| o.then(x.total_cmp(y)))
+            let (x, y) = (case(&inputs[a]), case(&inputs[b]));
+            x[0].total_cmp(&y[0]).then(x[1].total_cmp(&y[1])).then(x[2].total_cmp(&y[2]))
         });
         let sorted: Vec<MfInput> = order.iter().map(|&i| inputs[i]).collect();
         GridBatch { columns: InputColumns::of_inputs(&sorted), order }
