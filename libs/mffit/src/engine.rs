@@ -13,7 +13,7 @@
 //! a second model to keep in step with `mftyre`; numeric ones are exactly as correct as the
 //! model itself.
 
-use mftyre::{BatchInput, BatchOutput, MfInput, TyreParams, UseMode};
+use mftyre::{BatchColumn, BatchInput, MfInput, TyreParams, UseMode};
 use nalgebra::{DMatrix, DVector};
 use std::ops::Range;
 
@@ -81,14 +81,14 @@ impl Channel {
     /// [`Channel::eval`] at every point of `inputs`, into `out` (as long as `inputs`), by the
     /// batch kernel; `scratch` holds the kernel's outputs between calls.
     pub fn eval_batch(self, params: &TyreParams, inputs: &BatchInput<'_>, scratch: &mut BatchScratch, out: &mut [f64]) {
-        let full = |mode: UseMode, scratch: &mut BatchScratch| {
-            // The columns are built from points, so their lengths always agree.
-            let _ = mftyre::evaluate_batch(params, mode, inputs, &mut scratch.full);
+        // The columns are built from points, so their lengths always agree.
+        let column = |mode: UseMode, column: BatchColumn, values: &mut Vec<f64>| {
+            let _ = mftyre::evaluate_column(params, mode, inputs, column, values);
         };
-        let column: &[f64] = match self {
+        let values = &mut scratch.values;
+        match self {
             Channel::Fy0 => {
-                let _ = mftyre::pure_fy_batch(params, UseMode::M211, inputs, &mut scratch.values);
-                &scratch.values
+                let _ = mftyre::pure_fy_batch(params, UseMode::M211, inputs, values);
             }
             // Pure Fx has no batch path; it is one of the cheapest channels.
             Channel::Fx0 => {
@@ -97,32 +97,24 @@ impl Channel {
                 }
                 return;
             }
-            Channel::Mz0 | Channel::Mx => {
-                full(UseMode::M212, scratch);
-                if self == Channel::Mz0 { &scratch.full.mz_nm } else { &scratch.full.mx_nm }
-            }
-            _ => {
-                full(UseMode::M211, scratch);
-                let o = &scratch.full;
-                match self {
-                    Channel::Fx => &o.fx_n,
-                    Channel::Fy => &o.fy_n,
-                    Channel::Mz => &o.mz_nm,
-                    Channel::Rl => &o.rl_m,
-                    Channel::Re => &o.re_m,
-                    Channel::Cx => &o.cx_npm,
-                    _ => &o.sigmay_m,
-                }
-            }
-        };
-        out.copy_from_slice(&column[..out.len()]);
+            // The batch kernel computes only the terms each channel's column needs.
+            Channel::Mz0 => column(UseMode::M212, BatchColumn::MzNm, values),
+            Channel::Mx => column(UseMode::M212, BatchColumn::MxNm, values),
+            Channel::Fx => column(UseMode::M211, BatchColumn::FxN, values),
+            Channel::Fy => column(UseMode::M211, BatchColumn::FyN, values),
+            Channel::Mz => column(UseMode::M211, BatchColumn::MzNm, values),
+            Channel::Rl => column(UseMode::M211, BatchColumn::RlM, values),
+            Channel::Re => column(UseMode::M211, BatchColumn::ReM, values),
+            Channel::Cx => column(UseMode::M211, BatchColumn::CxNpm, values),
+            Channel::SigmaY => column(UseMode::M211, BatchColumn::SigmayM, values),
+        }
+        out.copy_from_slice(&values[..out.len()]);
     }
 }
 
 /// The batch kernel's output buffers, kept between evaluations (one per worker thread).
 #[derive(Debug, Default)]
 pub struct BatchScratch {
-    full: BatchOutput,
     values: Vec<f64>,
 }
 

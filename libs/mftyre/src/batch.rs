@@ -1,6 +1,6 @@
 //! Struct-of-arrays evaluation for fitting and simulation.
 
-use crate::kernel::{Inputs, Kernel, eval_chunk, pure_fy_chunk};
+use crate::kernel::{Inputs, Kernel, Outputs, eval_chunk, pure_fy_chunk, want};
 use crate::lanes::{L, V};
 use crate::model::{Clamped, MfInput, MfOutput, UseMode};
 use crate::params::{ScalingFactors, TyreParams};
@@ -262,6 +262,70 @@ pub fn pure_fy_batch(
     Ok(())
 }
 
+/// One output of the model, for [`evaluate_column`].
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub enum BatchColumn {
+    /// Fx, N (combined slip in combined modes).
+    FxN,
+    /// Fy, N.
+    FyN,
+    /// Mz, N·m.
+    MzNm,
+    /// Mx, N·m.
+    MxNm,
+    /// My, N·m.
+    MyNm,
+    /// Effective rolling radius, m.
+    ReM,
+    /// Loaded radius, m.
+    RlM,
+    /// Longitudinal carcass stiffness, N/m.
+    CxNpm,
+    /// Lateral relaxation length, m.
+    SigmayM,
+}
+
+impl BatchColumn {
+    /// This column of a chunk's outputs.
+    #[inline(always)]
+    fn of(self, o: &Outputs) -> V {
+        match self {
+            BatchColumn::FxN => o.fx_n,
+            BatchColumn::FyN => o.fy_n,
+            BatchColumn::MzNm => o.mz_nm,
+            BatchColumn::MxNm => o.mx_nm,
+            BatchColumn::MyNm => o.my_nm,
+            BatchColumn::ReM => o.re_m,
+            BatchColumn::RlM => o.rl_m,
+            BatchColumn::CxNpm => o.cx_npm,
+            BatchColumn::SigmayM => o.sigmay_m,
+        }
+    }
+}
+
+/// One output column for every point into `out` (cleared first): the values of
+/// [`evaluate_batch`]'s column of the same name, computing only the terms that column needs.
+///
+/// This is what a fit calls in its inner loop (residuals and Jacobian columns of one channel):
+/// Mx, for example, needs the lateral force but no aligning moment, rolling resistance or radii.
+/// The values are those of the full evaluation, bit for bit, except in a chunk where the full
+/// evaluation fell back to the scalar model because of an output this column does not use
+/// (then they agree to a few ulp); `tests/batch.rs` checks every column in every mode.
+pub fn evaluate_column(
+    params: &TyreParams,
+    mode: UseMode,
+    inputs: &BatchInput<'_>,
+    column: BatchColumn,
+    out: &mut Vec<f64>,
+) -> Result<(), BatchLengthError> {
+    let n = inputs.validate()?;
+    out.clear();
+    out.reserve(n);
+    let k = Kernel::new(params, &params.scaling, mode);
+    column_dispatch(&k, inputs, column, out);
+    Ok(())
+}
+
 /// Chunk `start..start + L` of `inputs` (lanes past the end repeat the last point).
 #[inline(always)]
 fn chunk(inputs: &BatchInput<'_>, start: usize, n: usize) -> Inputs {
@@ -296,7 +360,7 @@ fn full_generic<const F: bool>(k: &Kernel<'_>, inputs: &BatchInput<'_>, out: &mu
     let mut start = 0;
     while start < n {
         let m = L.min(n - start);
-        let o = eval_chunk::<F>(k, &chunk(inputs, start, n), &mut cache);
+        let o = eval_chunk::<F, { want::ALL }>(k, &chunk(inputs, start, n), &mut cache);
         if m == L {
             // Fixed-length copies compile to plain vector stores.
             macro_rules! store {
@@ -312,6 +376,43 @@ fn full_generic<const F: bool>(k: &Kernel<'_>, inputs: &BatchInput<'_>, out: &mu
             out.clamped.extend_from_slice(&o.clamped[..m]);
         }
         start += L;
+    }
+}
+
+#[inline(always)]
+fn column_generic<const F: bool, const W: u32>(
+    k: &Kernel<'_>,
+    inputs: &BatchInput<'_>,
+    column: BatchColumn,
+    out: &mut Vec<f64>,
+) {
+    let n = inputs.len();
+    let mut cache = None;
+    let mut start = 0;
+    while start < n {
+        let m = L.min(n - start);
+        let o = eval_chunk::<F, W>(k, &chunk(inputs, start, n), &mut cache);
+        let v = column.of(&o);
+        if m == L {
+            out.extend_from_slice(&v.0);
+        } else {
+            out.extend_from_slice(&v.0[..m]);
+        }
+        start += L;
+    }
+}
+
+/// [`column_generic`] for `column`, with the mask its output needs.
+#[inline(always)]
+fn column_masked<const F: bool>(k: &Kernel<'_>, inputs: &BatchInput<'_>, column: BatchColumn, out: &mut Vec<f64>) {
+    match column {
+        BatchColumn::FxN => column_generic::<F, { want::FX }>(k, inputs, column, out),
+        BatchColumn::FyN => column_generic::<F, { want::FY }>(k, inputs, column, out),
+        BatchColumn::MzNm => column_generic::<F, { want::MZ }>(k, inputs, column, out),
+        BatchColumn::MxNm => column_generic::<F, { want::MX }>(k, inputs, column, out),
+        BatchColumn::MyNm => column_generic::<F, { want::MY }>(k, inputs, column, out),
+        BatchColumn::ReM | BatchColumn::RlM => column_generic::<F, { want::RADII }>(k, inputs, column, out),
+        BatchColumn::CxNpm | BatchColumn::SigmayM => column_generic::<F, { want::LOAD_ONLY }>(k, inputs, column, out),
     }
 }
 
@@ -337,6 +438,16 @@ fn full_portable(k: &Kernel<'_>, inputs: &BatchInput<'_>, out: &mut BatchOutput)
 
 fn pure_fy_portable(k: &Kernel<'_>, inputs: &BatchInput<'_>, fy_n: &mut Vec<f64>) {
     pure_fy_generic::<false>(k, inputs, fy_n);
+}
+
+fn column_portable(k: &Kernel<'_>, inputs: &BatchInput<'_>, column: BatchColumn, out: &mut Vec<f64>) {
+    column_masked::<false>(k, inputs, column, out);
+}
+
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2,fma")]
+fn column_avx2(k: &Kernel<'_>, inputs: &BatchInput<'_>, column: BatchColumn, out: &mut Vec<f64>) {
+    column_masked::<true>(k, inputs, column, out);
 }
 
 #[cfg(target_arch = "x86_64")]
@@ -375,6 +486,19 @@ fn full_dispatch(k: &Kernel<'_>, inputs: &BatchInput<'_>, out: &mut BatchOutput)
         return;
     }
     full_portable(k, inputs, out);
+}
+
+fn column_dispatch(k: &Kernel<'_>, inputs: &BatchInput<'_>, column: BatchColumn, out: &mut Vec<f64>) {
+    #[cfg(target_arch = "x86_64")]
+    if have_avx2() {
+        // SAFETY: as in `full_dispatch`: AVX2 and FMA were detected at run time.
+        #[allow(unsafe_code)]
+        unsafe {
+            column_avx2(k, inputs, column, out)
+        };
+        return;
+    }
+    column_portable(k, inputs, column, out);
 }
 
 fn pure_fy_dispatch(k: &Kernel<'_>, inputs: &BatchInput<'_>, fy_n: &mut Vec<f64>) {

@@ -18,6 +18,28 @@ use crate::params::{ScalingFactors, TyreParams};
 
 const EPS: f64 = 1e-6;
 
+/// Which outputs a kernel instance computes: a bit mask, a const parameter of [`eval_points`],
+/// so each variant compiles to only the work its outputs need (a fit of one channel calls the
+/// model thousands of times and needs one column). Outputs outside the mask read as 0.
+pub(crate) mod want {
+    /// Fx (combined Fx in combined modes).
+    pub const FX: u32 = 1;
+    /// Fy.
+    pub const FY: u32 = 2;
+    /// Mz, trail and Mzr.
+    pub const MZ: u32 = 4;
+    /// Mx.
+    pub const MX: u32 = 8;
+    /// My.
+    pub const MY: u32 = 16;
+    /// Re, Ω, loaded radius, deflection and vertical stiffness.
+    pub const RADII: u32 = 32;
+    /// Every output: the full evaluation.
+    pub const ALL: u32 = FX | FY | MZ | MX | MY | RADII;
+    /// Only the terms that depend on the load case (Cx, Cy, σx, σy, Kxκ, Kyα, μ, contact patch).
+    pub const LOAD_ONLY: u32 = 0;
+}
+
 /// One chunk of inputs, one lane per point.
 #[derive(Clone, Copy, Debug)]
 pub(crate) struct Inputs {
@@ -632,19 +654,23 @@ fn deflection(k: &Kernel<'_>, x: &Prepared, lt: &LoadTerms, omega: V, r_omega: V
     (rho, rl, fz / rho)
 }
 
-/// The full evaluation of one chunk. `cache` holds the load-case terms of the previous chunk
+/// The evaluation of one chunk, of the outputs in the mask `W` ([`want`]). `cache` holds the load-case terms of the previous chunk
 /// and is reused when every lane has the same load case (sweeps). A chunk in which some lane
 /// left the lane functions' fast ranges (huge or non-finite arguments) is evaluated by the
 /// scalar model instead.
 #[inline(always)]
-pub(crate) fn eval_chunk<const F: bool>(k: &Kernel<'_>, input: &Inputs, cache: &mut Option<LoadTerms>) -> Outputs {
+pub(crate) fn eval_chunk<const F: bool, const W: u32>(
+    k: &Kernel<'_>,
+    input: &Inputs,
+    cache: &mut Option<LoadTerms>,
+) -> Outputs {
     let gd = Guard::<F>::default();
     let x = prepare(k, &gd, input);
     let lt = match cache {
         Some(lt) if same_load(&x, lt) => lt,
         _ => cache.insert(load_terms(k, &gd, &x)),
     };
-    let out = eval_points(k, &gd, input, &x, lt);
+    let out = eval_points::<F, W>(k, &gd, input, &x, lt);
     if gd.any() {
         *cache = None;
         return scalar_chunk(k, input);
@@ -669,7 +695,19 @@ fn scalar_chunk(k: &Kernel<'_>, input: &Inputs) -> Outputs {
 }
 
 #[inline(always)]
-fn eval_points<const F: bool>(k: &Kernel<'_>, gd: &Guard<F>, input: &Inputs, x: &Prepared, lt: &LoadTerms) -> Outputs {
+fn eval_points<const F: bool, const W: u32>(
+    k: &Kernel<'_>,
+    gd: &Guard<F>,
+    input: &Inputs,
+    x: &Prepared,
+    lt: &LoadTerms,
+) -> Outputs {
+    // What the mask needs, following the model's data flow: Mz uses Fx, Fy and Fy(γ = 0); Mx
+    // uses Fy; My uses Fx; the loaded radius uses Fx, Fy and the rolling radius.
+    let want_mz = W & want::MZ != 0;
+    let want_fx = W & (want::FX | want::MZ | want::MY | want::RADII) != 0;
+    let want_fy = W & (want::FY | want::MZ | want::MX | want::RADII) != 0;
+    let zero = V::splat(0.0);
     let p = k.p;
     let s = k.s;
     let vcx = x.vcx;
@@ -682,27 +720,34 @@ fn eval_points<const F: bool>(k: &Kernel<'_>, gd: &Guard<F>, input: &Inputs, x: 
     } else {
         (x.alpha, cos_alpha)
     };
-    let vsy = tan_alpha * vcx.abs();
-    let vc = (vcx * vcx + vsy * vsy).sqrt();
-    let cos_alpha_p = (vcx / (vc + EPS)).clamp(-1.0, 1.0);
 
-    let fx0 = fx_kernel(k, gd, &lt.fx, kappa, vcx);
-    let fy0 = fy_kernel(k, gd, &lt.fy, alpha_s, vcx);
-    let fy0_g0 =
-        if lt.gamma_s_zero { fy0 } else { sel(lt.gamma_s.eq(0.0), fy0, fy_kernel(k, gd, &lt.fy_g0, alpha_s, vcx)) };
+    let fx0 = if want_fx { fx_kernel(k, gd, &lt.fx, kappa, vcx) } else { zero };
+    let fy0 = if want_fy { fy_kernel(k, gd, &lt.fy, alpha_s, vcx) } else { zero };
+    let fy0_g0 = if !want_mz || lt.gamma_s_zero {
+        fy0
+    } else {
+        sel(lt.gamma_s.eq(0.0), fy0, fy_kernel(k, gd, &lt.fy_g0, alpha_s, vcx))
+    };
 
-    let alphar = alpha_s + lt.shf;
-    let alphat = alpha_s + lt.sht;
-    let mut et = lt.et_a * (1.0 + lt.et_b * FRAC_2_PI * gd.atan(lt.bt * lt.ct * alphat));
-    if k.limits {
-        et = sel(et.gt(1.0), 1.0, et);
-    }
-    let dr = lt.dr_a * sgn(vcx) * cos_alpha_s;
+    // The aligning-moment terms shared by the pure and the combined branch.
+    let mz_terms = || {
+        let vsy = tan_alpha * vcx.abs();
+        let vc = (vcx * vcx + vsy * vsy).sqrt();
+        let cos_alpha_p = (vcx / (vc + EPS)).clamp(-1.0, 1.0);
+        let alphar = alpha_s + lt.shf;
+        let alphat = alpha_s + lt.sht;
+        let mut et = lt.et_a * (1.0 + lt.et_b * FRAC_2_PI * gd.atan(lt.bt * lt.ct * alphat));
+        if k.limits {
+            et = sel(et.gt(1.0), 1.0, et);
+        }
+        let dr = lt.dr_a * sgn(vcx) * cos_alpha_s;
+        (cos_alpha_p, alphar, alphat, et, dr)
+    };
 
     let (fx, fy, mz, trail, mzr) = if k.combined {
         let cb = &p.combined;
         let alpha_zero = alpha_s.eq(0.0);
-        let gx = if alpha_zero.all() {
+        let gx = if !want_fx || alpha_zero.all() {
             V::splat(1.0)
         } else {
             let bxa = lt.bxa_a * cos_atan(cb.rbx2 * kappa);
@@ -713,7 +758,7 @@ fn eval_points<const F: bool>(k: &Kernel<'_>, gd: &Guard<F>, input: &Inputs, x: 
         };
         let kappa_zero = kappa.eq(0.0);
         let all_kappa_zero = kappa_zero.all();
-        let (gy, svyk) = if all_kappa_zero {
+        let (gy, svyk) = if !want_fy || all_kappa_zero {
             (V::splat(1.0), V::splat(0.0))
         } else {
             let byk = lt.byk_a * cos_atan(cb.rby2 * (alpha_s - cb.rby3));
@@ -724,44 +769,58 @@ fn eval_points<const F: bool>(k: &Kernel<'_>, gd: &Guard<F>, input: &Inputs, x: 
         };
         let fx = gx * fx0;
         let fy = gy * fy0 + svyk;
-        let (alphar_eq, alphat_eq) = if all_kappa_zero {
-            (alphar, alphat)
+        if want_mz {
+            let (cos_alpha_p, alphar, alphat, et, dr) = mz_terms();
+            let (alphar_eq, alphat_eq) = if all_kappa_zero {
+                (alphar, alphat)
+            } else {
+                let k_ratio = lt.fx.kxk / lt.kya_p * kappa;
+                let k2 = k_ratio * k_ratio;
+                let (sr, cr) = gd.sin_cos(alphar);
+                let (st, ct) = gd.sin_cos(alphat);
+                let tr = sr / cr;
+                let tt = st / ct;
+                let ar = gd.atan((tr * tr + k2).sqrt()) * sgn(alphar);
+                let at = gd.atan((tt * tt + k2).sqrt()) * sgn(alphat);
+                (sel(kappa_zero, alphar, ar), sel(kappa_zero, alphat, at))
+            };
+            let s_arm = lt.s_a + lt.s_fy * fy;
+            let mzr = dr * cos_atan(lt.br * alphar_eq) * x.reduction_smooth;
+            let t = lt.dt
+                * gd.cos(lt.ct * gd.atan(mf_arg(gd, lt.bt, alphat_eq, et)))
+                * cos_alpha_p
+                * s.lfzo
+                * x.reduction_smooth;
+            let mz = -t * (gy * fy0_g0) + mzr + s_arm * fx;
+            (fx, fy, mz, t, mzr)
         } else {
-            let k_ratio = lt.fx.kxk / lt.kya_p * kappa;
-            let k2 = k_ratio * k_ratio;
-            let (sr, cr) = gd.sin_cos(alphar);
-            let (st, ct) = gd.sin_cos(alphat);
-            let tr = sr / cr;
-            let tt = st / ct;
-            let ar = gd.atan((tr * tr + k2).sqrt()) * sgn(alphar);
-            let at = gd.atan((tt * tt + k2).sqrt()) * sgn(alphat);
-            (sel(kappa_zero, alphar, ar), sel(kappa_zero, alphat, at))
-        };
-        let s_arm = lt.s_a + lt.s_fy * fy;
-        let mzr = dr * cos_atan(lt.br * alphar_eq) * x.reduction_smooth;
-        let t = lt.dt
-            * gd.cos(lt.ct * gd.atan(mf_arg(gd, lt.bt, alphat_eq, et)))
-            * cos_alpha_p
-            * s.lfzo
-            * x.reduction_smooth;
-        let mz = -t * (gy * fy0_g0) + mzr + s_arm * fx;
-        (fx, fy, mz, t, mzr)
-    } else {
+            (fx, fy, zero, zero, zero)
+        }
+    } else if want_mz {
+        let (cos_alpha_p, alphar, alphat, et, dr) = mz_terms();
         let t0 = lt.dt * gd.cos(lt.ct * gd.atan(mf_arg(gd, lt.bt, alphat, et))) * cos_alpha_p * x.reduction_smooth;
         let mzr0 = dr * cos_atan(lt.br * alphar) * cos_alpha_p * x.reduction_smooth;
         (fx0, fy0, -t0 * fy0_g0 + mzr0, t0, mzr0)
+    } else {
+        (fx0, fy0, zero, zero, zero)
     };
 
-    let qx = &p.overturning;
-    let fy_r = fy * k.inv_fz0;
-    let g = x.gamma;
-    let mx_nm = lt.mx_const
-        + lt.mx_fz_lmx * (qx.qsx3 * fy_r + lt.mx_q4 * gd.sin(qx.qsx7 * g + qx.qsx8 * gd.atan(qx.qsx9 * fy_r)))
-        + lt.mx_fy_lin * fy;
-    let my_nm = my(k, gd, lt, vcx, input.kappa, fx);
+    let mx_nm = if W & want::MX != 0 {
+        let qx = &p.overturning;
+        let fy_r = fy * k.inv_fz0;
+        let g = x.gamma;
+        lt.mx_const
+            + lt.mx_fz_lmx * (qx.qsx3 * fy_r + lt.mx_q4 * gd.sin(qx.qsx7 * g + qx.qsx8 * gd.atan(qx.qsx9 * fy_r)))
+            + lt.mx_fy_lin * fy
+    } else {
+        zero
+    };
+    let my_nm = if W & want::MY != 0 { my(k, gd, lt, vcx, input.kappa, fx) } else { zero };
 
-    let (re, r_omega, omega) = rolling_radius(k, lt, vcx, input);
-    let (rho, rl, cz) = deflection(k, x, lt, omega, r_omega, fx, fy);
+    let (re, r_omega, omega) =
+        if W & want::RADII != 0 { rolling_radius(k, lt, vcx, input) } else { (zero, zero, zero) };
+    let (rho, rl, cz) =
+        if W & want::RADII != 0 { deflection(k, x, lt, omega, r_omega, fx, fy) } else { (zero, zero, zero) };
 
     Outputs {
         fx_n: fx,

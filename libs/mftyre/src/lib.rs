@@ -23,7 +23,10 @@ mod model;
 mod params;
 mod tir;
 
-pub use batch::{BatchInput, BatchLengthError, BatchOutput, evaluate_batch, evaluate_batch_scaled, pure_fy_batch};
+pub use batch::{
+    BatchColumn, BatchInput, BatchLengthError, BatchOutput, evaluate_batch, evaluate_batch_scaled, evaluate_column,
+    pure_fy_batch,
+};
 pub use model::{Clamped, MfInput, MfOutput, UseMode, UseModeError, evaluate, evaluate_scaled, pure_fx, pure_fy};
 pub use params::{
     Aligning, CoefGroup, Combined, ContactPatch, Dimension, Inertia, Limits, ModelParams, OperatingConditions,

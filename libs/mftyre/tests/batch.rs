@@ -3,7 +3,10 @@
 mod common;
 
 use common::{column, sample_tyre};
-use mftyre::{BatchInput, BatchOutput, MfInput, MfOutput, UseMode, evaluate, evaluate_batch, pure_fy, pure_fy_batch};
+use mftyre::{
+    BatchColumn, BatchInput, BatchOutput, MfInput, MfOutput, UseMode, evaluate, evaluate_batch, evaluate_column,
+    pure_fy, pure_fy_batch,
+};
 
 const COLUMNS: &[&str] = &[
     "Fx", "Fy", "Fz", "Mx", "My", "Mz", "kappa", "alpha", "gamma", "phit", "Vx", "P", "Re", "rho", "2a", "t", "mux",
@@ -150,6 +153,63 @@ fn pure_fy_batch_equals_scalar() {
             let want = pure_fy(&params, mode, x);
             let d = (got - want).abs();
             assert!(d <= 1e-13 * want.abs() || d <= 1e-14 * scale, "{mode} {x:?}: {got:e} vs {want:e}");
+        }
+    }
+}
+
+/// Each single-column evaluation gives its column of the full evaluation, in every mode, on
+/// points over and beyond the valid box: the output masks skip work, never change a value.
+#[test]
+fn single_columns_equal_the_full_evaluation_in_every_mode() {
+    let params = sample_tyre();
+    let pts = points(20_011, 13);
+    let cols = columns(&pts);
+    let mut full = BatchOutput::default();
+    let mut one = Vec::new();
+    let all = [
+        BatchColumn::FxN,
+        BatchColumn::FyN,
+        BatchColumn::MzNm,
+        BatchColumn::MxNm,
+        BatchColumn::MyNm,
+        BatchColumn::ReM,
+        BatchColumn::RlM,
+        BatchColumn::CxNpm,
+        BatchColumn::SigmayM,
+    ];
+    for mode in MODES {
+        evaluate_batch(&params, mode, &input_of(&cols), &mut full).expect("lengths");
+        for column in all {
+            evaluate_column(&params, mode, &input_of(&cols), column, &mut one).expect("lengths");
+            let want = match column {
+                BatchColumn::FxN => &full.fx_n,
+                BatchColumn::FyN => &full.fy_n,
+                BatchColumn::MzNm => &full.mz_nm,
+                BatchColumn::MxNm => &full.mx_nm,
+                BatchColumn::MyNm => &full.my_nm,
+                BatchColumn::ReM => &full.re_m,
+                BatchColumn::RlM => &full.rl_m,
+                BatchColumn::CxNpm => &full.cx_npm,
+                BatchColumn::SigmayM => &full.sigmay_m,
+            };
+            assert_eq!(one.len(), want.len(), "{mode} {column:?}: length");
+            let scale = want.iter().filter(|v| v.is_finite()).fold(0.0_f64, |m, v| m.max(v.abs()));
+            let mut identical = 0;
+            for (i, (a, b)) in one.iter().zip(want).enumerate() {
+                if a.to_bits() == b.to_bits() || (a.is_nan() && b.is_nan()) {
+                    identical += 1;
+                    continue;
+                }
+                // A chunk the full evaluation handed to the scalar model (some other output left
+                // the fast ranges) differs by a few ulp.
+                let d = (a - b).abs();
+                assert!(d <= 1e-13 * b.abs() || d <= 1e-13 * scale, "{mode} {column:?} point {i}: {a:e} vs {b:e}");
+            }
+            assert!(
+                identical * 10 >= one.len() * 9,
+                "{mode} {column:?}: only {identical} of {} bit-identical",
+                one.len()
+            );
         }
     }
 }
