@@ -694,6 +694,34 @@ fn scalar_chunk(k: &Kernel<'_>, input: &Inputs) -> Outputs {
     crate::batch::for_each_value_column!(lanes_of)
 }
 
+/// The aligning-moment terms shared by the pure and the combined branch of [`eval_points`]:
+/// (cos α′, αr, αt, Et, Dr). A function, not a closure: closures are not inlined reliably, and
+/// an outlined one loses the AVX2/FMA target of the kernel that calls it.
+#[inline(always)]
+#[allow(clippy::too_many_arguments)]
+fn mz_terms<const F: bool>(
+    k: &Kernel<'_>,
+    gd: &Guard<F>,
+    x: &Prepared,
+    lt: &LoadTerms,
+    alpha_s: V,
+    cos_alpha_s: V,
+    tan_alpha: V,
+) -> (V, V, V, V, V) {
+    let vcx = x.vcx;
+    let vsy = tan_alpha * vcx.abs();
+    let vc = (vcx * vcx + vsy * vsy).sqrt();
+    let cos_alpha_p = (vcx / (vc + EPS)).clamp(-1.0, 1.0);
+    let alphar = alpha_s + lt.shf;
+    let alphat = alpha_s + lt.sht;
+    let mut et = lt.et_a * (1.0 + lt.et_b * FRAC_2_PI * gd.atan(lt.bt * lt.ct * alphat));
+    if k.limits {
+        et = sel(et.gt(1.0), 1.0, et);
+    }
+    let dr = lt.dr_a * sgn(vcx) * cos_alpha_s;
+    (cos_alpha_p, alphar, alphat, et, dr)
+}
+
 #[inline(always)]
 fn eval_points<const F: bool, const W: u32>(
     k: &Kernel<'_>,
@@ -729,21 +757,6 @@ fn eval_points<const F: bool, const W: u32>(
         sel(lt.gamma_s.eq(0.0), fy0, fy_kernel(k, gd, &lt.fy_g0, alpha_s, vcx))
     };
 
-    // The aligning-moment terms shared by the pure and the combined branch.
-    let mz_terms = || {
-        let vsy = tan_alpha * vcx.abs();
-        let vc = (vcx * vcx + vsy * vsy).sqrt();
-        let cos_alpha_p = (vcx / (vc + EPS)).clamp(-1.0, 1.0);
-        let alphar = alpha_s + lt.shf;
-        let alphat = alpha_s + lt.sht;
-        let mut et = lt.et_a * (1.0 + lt.et_b * FRAC_2_PI * gd.atan(lt.bt * lt.ct * alphat));
-        if k.limits {
-            et = sel(et.gt(1.0), 1.0, et);
-        }
-        let dr = lt.dr_a * sgn(vcx) * cos_alpha_s;
-        (cos_alpha_p, alphar, alphat, et, dr)
-    };
-
     let (fx, fy, mz, trail, mzr) = if k.combined {
         let cb = &p.combined;
         let alpha_zero = alpha_s.eq(0.0);
@@ -770,7 +783,7 @@ fn eval_points<const F: bool, const W: u32>(
         let fx = gx * fx0;
         let fy = gy * fy0 + svyk;
         if want_mz {
-            let (cos_alpha_p, alphar, alphat, et, dr) = mz_terms();
+            let (cos_alpha_p, alphar, alphat, et, dr) = mz_terms(k, gd, x, lt, alpha_s, cos_alpha_s, tan_alpha);
             let (alphar_eq, alphat_eq) = if all_kappa_zero {
                 (alphar, alphat)
             } else {
@@ -797,7 +810,7 @@ fn eval_points<const F: bool, const W: u32>(
             (fx, fy, zero, zero, zero)
         }
     } else if want_mz {
-        let (cos_alpha_p, alphar, alphat, et, dr) = mz_terms();
+        let (cos_alpha_p, alphar, alphat, et, dr) = mz_terms(k, gd, x, lt, alpha_s, cos_alpha_s, tan_alpha);
         let t0 = lt.dt * gd.cos(lt.ct * gd.atan(mf_arg(gd, lt.bt, alphat, et))) * cos_alpha_p * x.reduction_smooth;
         let mzr0 = dr * cos_atan(lt.br * alphar) * cos_alpha_p * x.reduction_smooth;
         (fx0, fy0, -t0 * fy0_g0 + mzr0, t0, mzr0)
