@@ -62,6 +62,17 @@ pub fn peaks(points: &[Point], slip: impl Fn(&Point) -> f64) -> Vec<Peak> {
     out
 }
 
+/// The peaks that are maxima of their curve: the force fell past them (the largest slip is
+/// clearly beyond the peak, and the force there is below it). A sweep that stops short of its
+/// peak (small-slip sweeps, run for stiffness and drift) reports its end as its "peak": a
+/// friction read from those is far too low (brush tyre, GS2MF: μ 0.6 at 2.5° against 1.1 at
+/// 8.5°) and starts the optimiser in the wrong basin. All of `peaks` when none qualifies.
+pub fn past_peak(peaks: &[Peak]) -> Vec<Peak> {
+    let real: Vec<Peak> =
+        peaks.iter().copied().filter(|p| p.slip_at_peak < 0.9 * p.slip_max && p.tail_ratio < 0.99).collect();
+    if real.is_empty() { peaks.to_vec() } else { real }
+}
+
 /// Shape factor C from how far the force falls beyond the peak: for a curve reaching well past
 /// its peak, `y∞/D = sin(C·π/2)`, so `C = 2 − (2/π)·asin(y∞/D)` (clamped to a sane range).
 pub fn shape_factor(peaks: &[Peak], default: f64) -> f64 {

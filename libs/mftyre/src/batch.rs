@@ -411,7 +411,8 @@ fn column_masked<const F: bool>(k: &Kernel<'_>, inputs: &BatchInput<'_>, column:
         BatchColumn::MzNm => column_generic::<F, { want::MZ }>(k, inputs, column, out),
         BatchColumn::MxNm => column_generic::<F, { want::MX }>(k, inputs, column, out),
         BatchColumn::MyNm => column_generic::<F, { want::MY }>(k, inputs, column, out),
-        BatchColumn::ReM | BatchColumn::RlM => column_generic::<F, { want::RADII }>(k, inputs, column, out),
+        BatchColumn::ReM => column_generic::<F, { want::RE }>(k, inputs, column, out),
+        BatchColumn::RlM => column_generic::<F, { want::RADII }>(k, inputs, column, out),
         BatchColumn::CxNpm | BatchColumn::SigmayM => column_generic::<F, { want::LOAD_ONLY }>(k, inputs, column, out),
     }
 }

@@ -32,10 +32,12 @@ pub(crate) mod want {
     pub const MX: u32 = 8;
     /// My.
     pub const MY: u32 = 16;
-    /// Re, Ω, loaded radius, deflection and vertical stiffness.
+    /// Re, Ω, loaded radius, deflection and vertical stiffness (the deflection needs Fx and Fy).
     pub const RADII: u32 = 32;
+    /// Re and Ω only (the rolling radius needs no forces).
+    pub const RE: u32 = 64;
     /// Every output: the full evaluation.
-    pub const ALL: u32 = FX | FY | MZ | MX | MY | RADII;
+    pub const ALL: u32 = FX | FY | MZ | MX | MY | RADII | RE;
     /// Only the terms that depend on the load case (Cx, Cy, σx, σy, Kxκ, Kyα, μ, contact patch).
     pub const LOAD_ONLY: u32 = 0;
 }
@@ -831,7 +833,7 @@ fn eval_points<const F: bool, const W: u32>(
     let my_nm = if W & want::MY != 0 { my(k, gd, lt, vcx, input.kappa, fx) } else { zero };
 
     let (re, r_omega, omega) =
-        if W & want::RADII != 0 { rolling_radius(k, lt, vcx, input) } else { (zero, zero, zero) };
+        if W & (want::RADII | want::RE) != 0 { rolling_radius(k, lt, vcx, input) } else { (zero, zero, zero) };
     let (rho, rl, cz) =
         if W & want::RADII != 0 { deflection(k, x, lt, omega, r_omega, fx, fy) } else { (zero, zero, zero) };
 

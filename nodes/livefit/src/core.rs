@@ -265,15 +265,28 @@ impl UpdateJob {
     /// Fits and maps the uncertainty.
     pub fn run(self) -> UpdateDone {
         let started = std::time::Instant::now();
-        let mut result = mffit::fit(&self.data, &self.opts);
-        let why = if self.final_update {
-            Some("final model".to_owned())
+        let fresh = || mffit::fit(&self.data, &mffit::FitOptions { warm_start: None, ..self.opts.clone() });
+        let result = if self.final_update {
+            // The final update always compares with a fresh fit: both fits at once (each is
+            // mostly one thread's work between its parallel Jacobians).
+            let (warm, cold) = std::thread::scope(|scope| {
+                let cold = scope.spawn(fresh);
+                (mffit::fit(&self.data, &self.opts), cold.join())
+            });
+            let cold = cold.unwrap_or_else(|panic| std::panic::resume_unwind(panic));
+            polish(warm, cold, "final model")
         } else {
-            result.as_ref().ok().and_then(|r| r.wants_fresh_fit()).map(|stage| format!("{stage} {UPSTREAM_NOTE}; kept"))
+            let warm = mffit::fit(&self.data, &self.opts);
+            match warm
+                .as_ref()
+                .ok()
+                .and_then(|r| r.wants_fresh_fit())
+                .map(|stage| format!("{stage} {UPSTREAM_NOTE}; kept"))
+            {
+                Some(why) => polish(warm, fresh(), &why),
+                None => warm,
+            }
         };
-        if let Some(why) = why {
-            result = polish(result, &self.data, &self.opts, &why);
-        }
         let mut grid = self.grid;
         let mut maps = Vec::new();
         if let Ok(r) = &result {
@@ -334,12 +347,9 @@ fn widest_gap(warm: &FitResult, fresh: &FitResult) -> String {
 /// first of the fit's warnings.
 fn polish(
     warm: Result<FitResult, mffit::FitError>,
-    data: &Dataset,
-    opts: &mffit::FitOptions,
+    cold: Result<FitResult, mffit::FitError>,
     why: &str,
 ) -> Result<FitResult, mffit::FitError> {
-    let cold_opts = mffit::FitOptions { warm_start: None, ..opts.clone() };
-    let cold = mffit::fit(data, &cold_opts);
     match (warm, cold) {
         (Ok(w), Ok(c)) => {
             let (sw, sc) = (score(&w, &c), score(&c, &w));

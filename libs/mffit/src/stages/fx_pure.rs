@@ -77,6 +77,8 @@ impl Stage for FxPure {
                 .collect();
             pk.extend(starts::peaks(&nom, |p| p.input.kappa));
         }
+        // Friction and the peak's position only from curves that pass their peak.
+        let pk = starts::past_peak(&pk);
         let (mu0, dmu) = starts::friction(&pk, fz0).unwrap_or((1.0, 0.0));
         let c = starts::shape_factor(&pk, 1.6);
         let k = starts::slope_at_zero(&base, |p| p.input.kappa, 0.02).unwrap_or(20.0).max(1.0);

@@ -10,7 +10,7 @@ use crate::error::FitError;
 use crate::identify::Levels;
 use crate::physics::MarginSet;
 use crate::stages::context::{Ctx, StagePoints, is_fm, near_nominal_camber, near_p0};
-use crate::stages::steps::{decide_keys, finish, run_steps};
+use crate::stages::steps::{decide_keys, finish, run_with_restarts};
 use crate::stages::{Stage, StageReport};
 use crate::starts;
 
@@ -101,6 +101,10 @@ impl Stage for FyPure {
             let nom: Vec<Point> = sw.iter().copied().filter(|p| near_nominal_camber(p) && near_p0(p, p0)).collect();
             pk.extend(starts::peaks(&nom, |p| p.input.alpha_rad));
         }
+        // Friction and the peak's position only from curves that pass their peak; the maxima of
+        // every curve (sweep ends included) give one of the other starts below.
+        let every_max = starts::friction(&pk, fz0).unwrap_or((1.0, 0.0));
+        let pk = starts::past_peak(&pk);
         let (mu0, dmu) = starts::friction(&pk, fz0).unwrap_or((1.0, 0.0));
         let c = starts::shape_factor(&pk, 1.3);
         let k = starts::slope_at_zero(base, |p| p.input.alpha_rad, 1.5f64.to_radians()).unwrap_or(-15.0);
@@ -146,7 +150,17 @@ impl Stage for FyPure {
             ("pressure", PRESSURE.to_vec(), all.clone()),
             ("all", candidates.clone(), all.clone()),
         ];
-        run_steps(ctx, params, rep, Channel::Fy0, all, &steps, self.margins())?;
+        // Shape and curvature have local minima (C at its bound, a huge camber term): if the fit
+        // stays well above the noise, other shapes — the brush tyre of the virtual rig lands in
+        // one from either friction start on some seeds.
+        let floor = ctx.noise_floor(|s| cornering(s, ctx), |s| s.fy_n);
+        let shape: &[&'static str] = &["PCY1", "PDY1", "PDY2", "PEY1"];
+        let alts = [
+            (shape, vec![1.3, mu0, dmu, -1.0]),
+            (shape, vec![c, every_max.0, every_max.1, e]),
+            (shape, vec![1.6, mu0, dmu, 0.0]),
+        ];
+        run_with_restarts(ctx, params, rep, Channel::Fy0, all, &steps, floor, &alts, self.margins())?;
         finish(ctx, params, &start, rep, Channel::Fy0, data, self.margins())
     }
 }
