@@ -127,3 +127,24 @@ pub fn median(mut v: Vec<f64>) -> Option<f64> {
     v.sort_by(f64::total_cmp);
     Some(v[v.len() / 2])
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn peak(mu: f64, at_deg: f64, max_deg: f64, tail: f64) -> Peak {
+        Peak { fz_n: 4000.0, mu, slip_at_peak: at_deg.to_radians(), tail_ratio: tail, slip_max: max_deg.to_radians() }
+    }
+
+    /// A sweep that stops at its largest force has no peak in it; friction is read from the
+    /// curves that pass theirs, or from all when none does.
+    #[test]
+    fn only_curves_past_their_peak_give_friction() {
+        let stopped_short = peak(0.6, 2.5, 2.5, 1.0);
+        let passed = peak(1.1, 8.5, 16.0, 0.95);
+        let nearly_at_end = peak(0.9, 11.0, 12.0, 0.999);
+        assert_eq!(past_peak(&[stopped_short, passed, nearly_at_end]), vec![passed]);
+        assert_eq!(past_peak(&[stopped_short]), vec![stopped_short]);
+        assert!(past_peak(&[]).is_empty());
+    }
+}

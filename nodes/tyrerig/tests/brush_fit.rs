@@ -132,3 +132,53 @@ fn drive_brake_run_alone_fits_combined_lateral_physically() {
         fitted("mz_combined")
     );
 }
+
+/// Full GS2MF runs of the virtual brush *road* tyre (seeds 1 and 2), fitted as `tyrerig fit`
+/// does. On these logs the fit once ended with FY pure at 4.2–4.6 % NRMSE (PCY1 at its bound)
+/// where the other seed reached 0.4 %: the friction start was read from sweeps that stop short
+/// of their peak (seed 2), and after the Jacobian held PKY4 at its start the refit of the
+/// others fell into another basin (seed 1, with the better start). Every lateral stage must now
+/// fit near the data's level.
+#[test]
+fn brush_road_gs2mf_runs_fit_the_lateral_stages() {
+    for seed in ["1", "2"] {
+        brush_road_gs2mf_fits_the_lateral_stages(seed);
+    }
+}
+
+fn brush_road_gs2mf_fits_the_lateral_stages(seed: &str) {
+    let dir = PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join(format!("brush_road_gs2mf_seed{seed}"));
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).expect("scratch dir");
+    let log = dir.join("run.mcap");
+    let run = Command::new(env!("CARGO_BIN_EXE_tyrerig"))
+        .current_dir(root())
+        .args(["run", "--headless", "--effects", "noise", "--seed", seed])
+        .args(["--rig-config", "launch-config/virtual_rig_brush_road.toml", "--out"])
+        .arg(&log)
+        .output()
+        .expect("run tyrerig run");
+    assert!(run.status.success(), "tyrerig run: {}", String::from_utf8_lossy(&run.stderr));
+    let report = dir.join("report");
+    let out = Command::new(env!("CARGO_BIN_EXE_tyrerig"))
+        .arg("fit")
+        .arg(&log)
+        .args(["--folds", "0", "--out"])
+        .arg(dir.join("fit.tir"))
+        .arg("--report")
+        .arg(&report)
+        .output()
+        .expect("run tyrerig fit");
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(out.status.success(), "tyrerig fit exited {:?}:\n{stderr}", out.status.code());
+    let json: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(report.join("fit.json")).expect("fit.json")).expect("json");
+    let stages = json["stages"].as_array().expect("stages");
+    // Fit NRMSE in % of peak (measured with the fix, seeds 1 and 2: 0.32 and 0.32, 2.47 and
+    // 2.45, 0.23 and 0.23 %).
+    for (name, limit) in [("fy_pure", 0.6), ("mz_pure", 3.0), ("mx", 0.6)] {
+        let s = stages.iter().find(|s| s["stage"] == name).unwrap_or_else(|| panic!("{name}: {stderr}"));
+        let nrmse = s["nrmse_pct"].as_f64().unwrap_or(f64::NAN);
+        assert!(nrmse <= limit, "seed {seed}, {name}: NRMSE {nrmse:.2} % > {limit} %\n{s}");
+    }
+}
