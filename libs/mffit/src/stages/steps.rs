@@ -44,9 +44,11 @@ pub fn decide_keys(
     // again at once: freeing them would only lead `finish` to hold them again and refit the
     // others pass after pass, the bulk of a live update's time.
     if let Some(warm) = ctx.warm(&rep.stage) {
+        // At the value they had there (their start, or their fitted value when holding them at
+        // the start cost too much, see `finish`): the warm values of the others go with it.
         for h in ctx.warm_held(&rep.stage) {
             if rep.free.iter().any(|k| *k == h.key) {
-                hold(params, start, rep, h.clone());
+                hold_at(params, rep, h.clone());
             }
         }
         for k in &rep.free {
@@ -58,9 +60,13 @@ pub fn decide_keys(
 }
 
 fn hold(params: &mut TyreParams, start: &TyreParams, rep: &mut StageReport, mut h: Held) {
-    let v = start.get(&h.key).unwrap_or(h.value);
-    let _ = params.set(&h.key, v);
-    h.value = v;
+    h.value = start.get(&h.key).unwrap_or(h.value);
+    hold_at(params, rep, h);
+}
+
+/// Holds `h.key` at `h.value`.
+fn hold_at(params: &mut TyreParams, rep: &mut StageReport, h: Held) {
+    let _ = params.set(&h.key, h.value);
     rep.free.retain(|k| *k != h.key);
     rep.held.retain(|x| x.key != h.key);
     rep.held.push(h);
