@@ -378,17 +378,28 @@ pub struct ValidRange {
 }
 
 impl ValidRange {
+    const EMPTY: ValidRange = ValidRange {
+        fz_n: Range::EMPTY,
+        alpha_rad: Range::EMPTY,
+        kappa: Range::EMPTY,
+        gamma_rad: Range::EMPTY,
+        p_pa: Range::EMPTY,
+        vx_mps: Range::EMPTY,
+    };
+
     /// The range covered by the force & moment data (sweeps, on-centre, graph sweeps) of a dataset.
     pub fn of(data: &Dataset) -> Self {
-        let mut r = ValidRange {
-            fz_n: Range::EMPTY,
-            alpha_rad: Range::EMPTY,
-            kappa: Range::EMPTY,
-            gamma_rad: Range::EMPTY,
-            p_pa: Range::EMPTY,
-            vx_mps: Range::EMPTY,
-        };
-        for (seg, s) in data.select(|s| matches!(s.kind, DataKind::Sweep | DataKind::OnCentre | DataKind::GraphSweep)) {
+        Self::merged(data.segments.iter().map(Self::of_segment))
+    }
+
+    /// The range one segment adds to [`ValidRange::of`] (empty for segments it ignores; the
+    /// slip-ratio range only from BrkDrv segments).
+    pub fn of_segment(seg: &Segment) -> Self {
+        let mut r = Self::EMPTY;
+        if !matches!(seg.kind, DataKind::Sweep | DataKind::OnCentre | DataKind::GraphSweep) {
+            return r;
+        }
+        for s in &seg.samples {
             r.fz_n.add(s.fz_n);
             r.alpha_rad.add(s.alpha_rad);
             r.gamma_rad.add(s.gamma_rad);
@@ -396,6 +407,28 @@ impl ValidRange {
             r.vx_mps.add(s.vx_mps);
             if seg.procedure == Procedure::BrkDrv {
                 r.kappa.add(s.kappa);
+            }
+        }
+        r
+    }
+
+    /// The range of segments' ranges ([`ValidRange::of_segment`]): what [`ValidRange::of`] gives
+    /// for their dataset.
+    pub fn merged(parts: impl IntoIterator<Item = ValidRange>) -> Self {
+        let mut r = Self::EMPTY;
+        for p in parts {
+            for (all, one) in [
+                (&mut r.fz_n, p.fz_n),
+                (&mut r.alpha_rad, p.alpha_rad),
+                (&mut r.kappa, p.kappa),
+                (&mut r.gamma_rad, p.gamma_rad),
+                (&mut r.p_pa, p.p_pa),
+                (&mut r.vx_mps, p.vx_mps),
+            ] {
+                if !one.is_empty() {
+                    all.add(one.min);
+                    all.add(one.max);
+                }
             }
         }
         if r.kappa.is_empty() {

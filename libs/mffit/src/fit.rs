@@ -4,7 +4,7 @@ use lsq::{Loss, Options};
 use mftyre::TyreParams;
 use nalgebra::DVector;
 
-use crate::engine::{Channel, ChannelProblem, Penalty, Point, apply, bounds_for, values_of};
+use crate::engine::{Channel, ChannelProblem, Differences, Penalty, Point, apply, bounds_for, values_of};
 use crate::error::FitError;
 
 /// What one step did.
@@ -29,6 +29,8 @@ pub struct StepSettings {
     pub max_iterations: usize,
     /// Worker threads.
     pub threads: usize,
+    /// How the optimiser's Jacobians are differenced.
+    pub differences: Differences,
 }
 
 impl Default for StepSettings {
@@ -37,6 +39,7 @@ impl Default for StepSettings {
             robust: None,
             max_iterations: 60,
             threads: std::thread::available_parallelism().map(|n| n.get()).unwrap_or(1),
+            differences: Differences::Forward,
         }
     }
 }
@@ -79,6 +82,7 @@ pub fn fit_step_with(
     }
     let mut problem = ChannelProblem::new(params, keys, points, channel, scale.max(1e-12));
     problem.threads = settings.threads.max(1);
+    problem.differences = settings.differences;
     if let Some(pen) = penalty {
         problem = problem.with_penalty(pen);
     }
@@ -112,10 +116,12 @@ pub fn rms(params: &TyreParams, points: &[Point], channel: Channel) -> f64 {
     if points.is_empty() {
         return f64::NAN;
     }
-    let s: f64 = points
+    let values = channel.values_at(params, points);
+    let s: f64 = values
         .iter()
-        .map(|p| {
-            let e = channel.eval(params, &p.input) - p.measured;
+        .zip(points)
+        .map(|(v, p)| {
+            let e = v - p.measured;
             e * e
         })
         .sum();

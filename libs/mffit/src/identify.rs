@@ -410,7 +410,7 @@ pub fn uncertainty_from(
     if n == 0 || m <= n {
         return (keys.iter().map(nan).collect(), 1.0, Vec::new());
     }
-    let res: Vec<f64> = points.iter().map(|p| channel.eval(params, &p.input) - p.measured).collect();
+    let res: Vec<f64> = channel.values_at(params, points).iter().zip(points).map(|(v, p)| v - p.measured).collect();
     let ssr: f64 = res.iter().map(|r| r * r).sum();
     let s2 = ssr / (m - n) as f64;
     let inflation = serial_inflation(&res, groups);

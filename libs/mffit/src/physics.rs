@@ -163,8 +163,11 @@ fn margins_of(params: &TyreParams, set: MarginSet, grid: &Grid, described: bool)
     let fz0 = params.fnomin_n();
     let p0 = params.nominal_pressure_pa();
     let mut out = Vec::new();
+    // Only failing margins are described: a grid has hundreds that hold, and formatting them
+    // all was a visible part of every live update.
     let mut push = |value: f64, what: &dyn Fn() -> String| {
-        out.push(Margin { value, what: if described { what() } else { String::new() } });
+        let failing = value.is_nan() || value < TOLERANCE;
+        out.push(Margin { value, what: if described && failing { what() } else { String::new() } });
     };
     let at = |fz: f64, gam: f64, p: f64| format!("Fz {fz:.0} N, IA {:.1} deg, P {:.0} kPa", gam.to_degrees(), p / 1e3);
     match set {
@@ -304,7 +307,8 @@ fn margins_of(params: &TyreParams, set: MarginSet, grid: &Grid, described: bool)
     out
 }
 
-/// Every margin of `set`, described, for findings.
+/// Every margin of `set`, for findings: the failing ones ([`fails`]) described, the others with
+/// an empty description.
 pub fn margins(params: &TyreParams, set: MarginSet, grid: &Grid) -> Vec<Margin> {
     margins_of(params, set, grid, true)
 }

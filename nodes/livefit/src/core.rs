@@ -155,6 +155,7 @@ impl LiveFit {
         UpdateJob {
             previous: self.previous.clone().map(|r| (r, self.maps.clone())),
             data: self.data.clone(),
+            fresh_opts: mffit::FitOptions { warm_start: None, ..opts.clone() },
             opts,
             grid: self.grid.clone(),
             p0_pa: self.cfg.p0_pa,
@@ -213,8 +214,11 @@ impl LiveFit {
         let mut job = self.begin_update();
         job.final_update = true;
         let final_opts = self.cfg.update_options(true);
+        // The warm fit keeps the updates' one-sided Jacobians; the fresh fit it is compared
+        // with is the offline fit's, option for option.
         job.opts.max_iterations = final_opts.max_iterations;
         job.opts.restarts = final_opts.restarts;
+        job.fresh_opts = final_opts;
         job
     }
 
@@ -233,6 +237,8 @@ pub struct UpdateJob {
     previous: Option<(Arc<FitResult>, Vec<PredictionMap>)>,
     data: Arc<Dataset>,
     opts: mffit::FitOptions,
+    /// The options of a fresh fit of all data, when one runs.
+    fresh_opts: mffit::FitOptions,
     grid: Option<EnvelopeGrid>,
     p0_pa: Option<f64>,
     index: u32,
@@ -265,7 +271,7 @@ impl UpdateJob {
     /// Fits and maps the uncertainty.
     pub fn run(self) -> UpdateDone {
         let started = std::time::Instant::now();
-        let fresh = || mffit::fit(&self.data, &mffit::FitOptions { warm_start: None, ..self.opts.clone() });
+        let fresh = || mffit::fit(&self.data, &self.fresh_opts);
         let result = if self.final_update {
             // The final update always compares with a fresh fit: both fits at once (each is
             // mostly one thread's work between its parallel Jacobians).

@@ -95,7 +95,9 @@ pub struct MonitorCore {
     state: ProcedureState,
     last_t: f64,
     checks: Vec<QualityCheck>,
-    last_signature: String,
+    /// The checks' levels and messages and the wear (0.01 mm) of the last report published:
+    /// a report goes out when they change.
+    last_signature: (Vec<(u8, String)>, i64),
     out_alarms: Vec<Alarm>,
     all_alarms: Vec<Alarm>,
 
@@ -171,7 +173,7 @@ impl MonitorCore {
             state: ProcedureState::default(),
             last_t: f64::NEG_INFINITY,
             checks,
-            last_signature: String::new(),
+            last_signature: (Vec::new(), i64::MIN),
             out_alarms: Vec::new(),
             all_alarms: Vec::new(),
             load_window: VecDeque::new(),
@@ -481,13 +483,20 @@ impl MonitorCore {
 
     fn emit(&mut self, t: f64) -> MonitorOutput {
         let wear_cmp = if self.wear.wear_mm.is_finite() { (self.wear.wear_mm * 100.0).round() as i64 } else { -1 };
-        let sig =
-            format!("{:?}|{wear_cmp}", self.checks.iter().map(|c| (c.level, c.message.as_str())).collect::<Vec<_>>());
+        // Compared in place: this runs for every sample, and formatting a signature each time
+        // was a visible part of a headless run.
+        let (last_checks, last_wear) = &self.last_signature;
+        let unchanged = *last_wear == wear_cmp
+            && last_checks.len() == self.checks.len()
+            && last_checks
+                .iter()
+                .zip(&self.checks)
+                .all(|((level, message), c)| *level == c.level && *message == c.message);
         let alarms = std::mem::take(&mut self.out_alarms);
-        if sig == self.last_signature {
+        if unchanged {
             return MonitorOutput { report: None, diagnostics: None, alarms };
         }
-        self.last_signature = sig;
+        self.last_signature = (self.checks.iter().map(|c| (c.level, c.message.clone())).collect(), wear_cmp);
         MonitorOutput { report: Some(self.report(t)), diagnostics: Some(self.diagnostics(t)), alarms }
     }
 

@@ -102,8 +102,12 @@ impl McapSink {
 
     fn write<M: RosMessage>(&mut self, topic: &'static str, t_s: f64, msg: &M) -> Result<(), LogWriteError> {
         let id = self.channel::<M>(topic)?;
-        let data = codec::encode(msg, &M::ros_type_name())
-            .map_err(|e| LogWriteError::Mcap { path: self.log.path().to_owned(), detail: e.to_string() })?;
+        // The type name only for the error: formatting it for each of millions of messages was
+        // a visible part of a headless run.
+        let data = tyre_msgs::cdr::to_cdr_with_header(msg).map_err(|e| LogWriteError::Mcap {
+            path: self.log.path().to_owned(),
+            detail: format!("{}: {e}", M::ros_type_name()),
+        })?;
         let publish = codec::leading_stamp(&data).map_or(0, |s| s.as_nanos());
         let log_time = (t_s.max(0.0) * 1e9).round() as u64;
         self.log.write(id, log_time, publish, &data)

@@ -175,7 +175,9 @@ fn brush_road_gs2mf_fits_the_lateral_stages(seed: &str) {
         serde_json::from_str(&std::fs::read_to_string(report.join("fit.json")).expect("fit.json")).expect("json");
     let stages = json["stages"].as_array().expect("stages");
     // Fit NRMSE in % of peak (measured with the fix, seeds 1 and 2: 0.32 and 0.32, 2.47 and
-    // 2.45, 0.23 and 0.23 %).
+    // 2.45, 0.23 and 0.23 %; with forward-difference Jacobians the offline fits of the same
+    // seeds' `--effects noise` logs give 0.32 and 0.32, 2.25 and 2.37, 0.23 and 0.23 %). With
+    // the hold rule switched off (HOLD_COST_LIMIT huge) this test fails, central or forward.
     for (name, limit) in [("fy_pure", 0.6), ("mz_pure", 3.0), ("mx", 0.6)] {
         let s = stages.iter().find(|s| s["stage"] == name).unwrap_or_else(|| panic!("{name}: {stderr}"));
         let nrmse = s["nrmse_pct"].as_f64().unwrap_or(f64::NAN);

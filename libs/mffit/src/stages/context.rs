@@ -4,7 +4,7 @@
 
 use mftyre::MfInput;
 
-use crate::data::{DataKind, Dataset, Procedure, Sample, Segment, resample};
+use crate::data::{DataKind, Dataset, Procedure, Sample, Segment, ValidRange, resample};
 use crate::engine::Point;
 use crate::fit::StepSettings;
 use crate::physics::Grid;
@@ -29,17 +29,53 @@ pub struct Ctx<'a> {
 
 /// Each segment of a dataset resampled at its period, computed on first use: the stages select
 /// their points from the same resampled segments, and resampling all data once per stage was a
-/// large part of a live update.
-#[derive(Debug, Default)]
+/// large part of a live update. Cloning shares the cells; a live fit's next update takes over the
+/// cells of the segments it already had ([`Resampled::continuing`]), so each segment is
+/// resampled once per run rather than once per update.
+#[derive(Clone, Default)]
 pub struct Resampled {
-    /// Per segment: the period and the resampled samples.
-    cells: Vec<std::sync::OnceLock<(f64, Vec<Sample>)>>,
+    cells: Vec<std::sync::Arc<SegmentCell>>,
+}
+
+/// What is computed once per segment, each with the number of raw samples it was computed from.
+#[derive(Default)]
+struct SegmentCell {
+    /// The period and the resampled samples.
+    resampled: std::sync::OnceLock<(f64, usize, Vec<Sample>)>,
+    /// The segment's part of the tested range.
+    range: std::sync::OnceLock<(usize, ValidRange)>,
 }
 
 impl Resampled {
     /// An empty cache for the segments of `data`.
     pub fn of(data: &Dataset) -> Self {
-        Resampled { cells: (0..data.segments.len()).map(|_| std::sync::OnceLock::new()).collect() }
+        Resampled { cells: (0..data.segments.len()).map(|_| Default::default()).collect() }
+    }
+
+    /// The cache for `data`, a dataset that grew from the one `previous` served by appending
+    /// segments (a live fit's): the cells of the segments both hold are shared. A cell whose
+    /// segment changed after all (another sample count) is not used ([`Ctx::resampled`]).
+    pub fn continuing(previous: &Resampled, data: &Dataset) -> Self {
+        let cells = (0..data.segments.len()).map(|i| previous.cells.get(i).cloned().unwrap_or_default()).collect();
+        Resampled { cells }
+    }
+
+    /// [`ValidRange::of`] `data`, from the segments' ranges computed once per segment.
+    pub fn valid_range(&self, data: &Dataset) -> ValidRange {
+        ValidRange::merged(data.segments.iter().enumerate().map(|(i, seg)| match self.cells.get(i) {
+            Some(cell) => {
+                let (raw, r) = cell.range.get_or_init(|| (seg.samples.len(), ValidRange::of_segment(seg)));
+                if *raw == seg.samples.len() { *r } else { ValidRange::of_segment(seg) }
+            }
+            None => ValidRange::of_segment(seg),
+        }))
+    }
+}
+
+impl std::fmt::Debug for Resampled {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        let done = self.cells.iter().filter(|c| c.resampled.get().is_some()).count();
+        write!(f, "Resampled({done} of {} segments)", self.cells.len())
     }
 }
 
@@ -174,8 +210,9 @@ impl Ctx<'_> {
         let period = self.period_of(seg);
         match self.resampled.cells.get(i) {
             Some(cell) => {
-                let (at, samples) = cell.get_or_init(|| (period, resample(&seg.samples, period)));
-                if at.to_bits() == period.to_bits() {
+                let (at, raw, samples) =
+                    cell.resampled.get_or_init(|| (period, seg.samples.len(), resample(&seg.samples, period)));
+                if at.to_bits() == period.to_bits() && *raw == seg.samples.len() {
                     std::borrow::Cow::Borrowed(samples)
                 } else {
                     std::borrow::Cow::Owned(resample(&seg.samples, period))
@@ -259,4 +296,60 @@ pub fn near_nominal_camber(p: &Point) -> bool {
 /// Within 5 kPa of the nominal pressure.
 pub fn near_p0(p: &Point, p0: f64) -> bool {
     (p.input.p_pa - p0).abs() < 5e3
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::synth::{self, Noise, SynthOptions};
+
+    fn data() -> Dataset {
+        let tyre =
+            mftyre::TyreParams::from_tir_str(crate::stages::TEMPLATE_TIR, "template").expect("the template parses");
+        synth::gs2mf(&tyre, SynthOptions { rate_hz: 5.0, noise: Noise::OFF, ..Default::default() })
+    }
+
+    fn ctx<'a>(data: &'a Dataset, opts: &'a FitOptions, resampled: Resampled) -> Ctx<'a> {
+        let nominal = crate::stages::nominal::nominal_values(data, opts).expect("nominal values");
+        let params = mftyre::TyreParams::from_tir_str(crate::stages::TEMPLATE_TIR, "template").expect("parses");
+        let grid = Grid::of_range(&params, &ValidRange::of(data));
+        Ctx { data, opts, nominal, settings: StepSettings::default(), grid, resampled }
+    }
+
+    #[test]
+    fn a_continuing_cache_serves_the_segments_it_had_and_computes_the_new_ones() {
+        let all = data();
+        let opts = FitOptions::default();
+        let mut first = all.clone();
+        first.segments.truncate(all.segments.len() / 2);
+        let earlier = Resampled::of(&first);
+        let c = ctx(&first, &opts, earlier.clone());
+        let fy = |c: &Ctx| c.points(|s| s.kind == DataKind::Sweep, |_| true, |s| s.fy_n, usize::MAX);
+        let before = fy(&c);
+        assert_eq!(earlier.valid_range(&first), ValidRange::of(&first));
+
+        let later = Resampled::continuing(&earlier, &all);
+        // The cells of the first half are shared, so nothing in them is resampled again.
+        assert!(matches!(ctx(&all, &opts, later.clone()).resampled(0), std::borrow::Cow::Borrowed(_)));
+        assert_eq!(later.valid_range(&all), ValidRange::of(&all));
+        let c = ctx(&all, &opts, later);
+        let after = fy(&c);
+        assert_eq!(after, fy(&ctx(&all, &opts, Resampled::of(&all))));
+        assert!(after.len() > before.len());
+
+        // A segment that changed under a shared cell (another sample count) is not served from it.
+        let mut changed = all.clone();
+        let longest = (0..changed.segments.len()).max_by_key(|&i| changed.segments[i].samples.len()).expect("segments");
+        changed.segments[longest].samples.truncate(3);
+        let stale = Resampled::continuing(&Resampled::continuing(&earlier, &all), &changed);
+        let c = ctx(&changed, &opts, stale.clone());
+        // Fill the shared cells from the unchanged data first.
+        let filler = Resampled::continuing(&stale, &all);
+        let _ = fy(&ctx(&all, &opts, filler.clone()));
+        let _ = filler.valid_range(&all);
+        assert!(matches!(ctx(&all, &opts, filler).resampled(longest), std::borrow::Cow::Borrowed(_)));
+        assert!(matches!(c.resampled(longest), std::borrow::Cow::Owned(_)));
+        assert_eq!(fy(&c), fy(&ctx(&changed, &opts, Resampled::of(&changed))));
+        assert_eq!(stale.valid_range(&changed), ValidRange::of(&changed));
+    }
 }

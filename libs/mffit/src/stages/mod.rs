@@ -73,6 +73,9 @@ pub struct FitOptions {
     /// Try other starting values when a stage ends above its noise floor (as a fresh fit does);
     /// a live update after a sweep turns it off and continues from the previous solution.
     pub restarts: bool,
+    /// How the optimiser's Jacobians are differenced: forward by default (the Jacobians that
+    /// decide which keys are identified, and the covariances, are always central).
+    pub differences: crate::engine::Differences,
     /// A previous solution to start from (the live fit's update after a new sweep): stages it
     /// fitted start from its coefficients and run only their final, all-keys step.
     pub warm_start: Option<WarmStart>,
@@ -118,6 +121,8 @@ pub struct WarmStart {
     jacobian_held: Vec<(String, Vec<Held>)>,
     /// Per stage, the NRMSE (%) of its latest fit from the data's start.
     fresh_nrmse_pct: Vec<(String, f64)>,
+    /// The previous fit's resampled segments (the next fit's data begin with the same ones).
+    resampled: Resampled,
 }
 
 impl WarmStart {
@@ -162,6 +167,7 @@ impl WarmStart {
             nominal: [n.v0_mps, n.p0_pa, n.fz0_n, n.r0_m],
             jacobian_held,
             fresh_nrmse_pct,
+            resampled: result.resampled.clone(),
         }
     }
 
@@ -282,6 +288,7 @@ impl Default for FitOptions {
             folds: 5,
             skip_stages: Vec::new(),
             restarts: true,
+            differences: crate::engine::Differences::Forward,
             warm_start: None,
         }
     }
@@ -419,6 +426,8 @@ pub struct FitResult {
     pub wall_s: f64,
     /// Accuracy on other runs ([`validate`]), per source; filled by the caller.
     pub validation: Vec<(String, Vec<ValidationRow>)>,
+    /// The data's segments as resampled for this fit (a warm start's next fit reuses them).
+    resampled: Resampled,
 }
 
 impl FitResult {
@@ -464,6 +473,16 @@ pub trait Stage: Sync {
     ) -> Result<(), FitError>;
 }
 
+/// The parsed [`TEMPLATE_TIR`] (parsed once: a live fit starts from it every update).
+fn template() -> Result<TyreParams, FitError> {
+    static PARSED: std::sync::OnceLock<Option<TyreParams>> = std::sync::OnceLock::new();
+    match PARSED.get_or_init(|| TyreParams::from_tir_str(TEMPLATE_TIR, "mffit template").ok()) {
+        Some(t) => Ok(t.clone()),
+        // Parsed again for the error itself.
+        None => Ok(TyreParams::from_tir_str(TEMPLATE_TIR, "mffit template")?),
+    }
+}
+
 /// The stages, in the thesis's order.
 pub static STAGES: [&dyn Stage; 9] = [
     &fy_pure::FyPure,
@@ -484,7 +503,7 @@ pub fn fit(data: &Dataset, opts: &FitOptions) -> Result<FitResult, FitError> {
     let nominal = nominal_values(data, opts)?;
     let mut params = match &opts.template {
         Some(t) => t.clone(),
-        None => TyreParams::from_tir_str(TEMPLATE_TIR, "mffit template")?,
+        None => template()?,
     };
     params.fittyp = 61;
     params.source = "tyrerig fit".into();
@@ -493,11 +512,19 @@ pub fn fit(data: &Dataset, opts: &FitOptions) -> Result<FitResult, FitError> {
     params.set("INFLPRES", nominal.p0_pa)?;
     params.set("FNOMIN", nominal.fz0_n)?;
     params.set("UNLOADED_RADIUS", nominal.r0_m)?;
-    let range = ValidRange::of(data);
-    let settings =
-        StepSettings { robust: opts.robust_pct, max_iterations: opts.max_iterations, threads: opts.threads.max(1) };
+    let resampled = match &opts.warm_start {
+        Some(w) => Resampled::continuing(&w.resampled, data),
+        None => Resampled::of(data),
+    };
+    let range = resampled.valid_range(data);
+    let settings = StepSettings {
+        robust: opts.robust_pct,
+        max_iterations: opts.max_iterations,
+        threads: opts.threads.max(1),
+        differences: opts.differences,
+    };
     let grid = Grid::of_range(&params, &range);
-    let ctx = Ctx { data, opts, nominal: nominal.clone(), settings, grid, resampled: Resampled::of(data) };
+    let ctx = Ctx { data, opts, nominal: nominal.clone(), settings, grid, resampled };
     let mut stages = Vec::new();
     let mut stage_data = Vec::new();
     let mut nom = StageReport::new("nominal", "-");
@@ -564,7 +591,7 @@ pub fn fit(data: &Dataset, opts: &FitOptions) -> Result<FitResult, FitError> {
             nominal: nominal.clone(),
             settings,
             grid: ctx.grid.clone(),
-            resampled: Resampled::of(data),
+            resampled: ctx.resampled.clone(),
         });
         let stage_ctx = match (&cold_ctx, warm) {
             (Some(cold), false) => {
@@ -665,6 +692,7 @@ pub fn fit(data: &Dataset, opts: &FitOptions) -> Result<FitResult, FitError> {
         warnings,
         wall_s: t_start.elapsed().as_secs_f64(),
         validation: Vec::new(),
+        resampled: ctx.resampled.clone(),
     })
 }
 
@@ -704,6 +732,7 @@ mod tests {
             nominal: [0.0; 4],
             jacobian_held: Vec::new(),
             fresh_nrmse_pct: fresh.iter().map(|(s, v)| (s.to_string(), *v)).collect(),
+            resampled: Resampled::default(),
         }
     }
 

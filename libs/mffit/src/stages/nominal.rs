@@ -28,8 +28,9 @@ fn median(mut v: Vec<f64>) -> Option<f64> {
     if v.is_empty() {
         return None;
     }
-    v.sort_by(f64::total_cmp);
-    Some(v[v.len() / 2])
+    // The middle element without sorting all of them (a live fit takes this every update).
+    let mid = v.len() / 2;
+    Some(*v.select_nth_unstable_by(mid, f64::total_cmp).1)
 }
 
 /// Distinct pressure levels (clustered to 5 kPa), ascending; rare levels (pressure changes pass
@@ -78,14 +79,18 @@ fn r0_from(samples: &[&Sample], levels: &[f64]) -> Option<f64> {
         return None;
     }
     let vmin = samples.iter().map(|s| s.vx_mps).fold(f64::INFINITY, f64::min);
+    // One pass over the samples for all levels (a live fit takes this every update).
+    let mut per_level: Vec<Vec<(f64, f64)>> = vec![Vec::new(); levels.len()];
+    for s in samples.iter().filter(|s| s.vx_mps < vmin + 2.0) {
+        for (xy, &p) in per_level.iter_mut().zip(levels) {
+            if (s.p_pa - p).abs() < 5e3 {
+                xy.push((s.fz_n, s.rl_m));
+            }
+        }
+    }
     let mut r0s = Vec::new();
-    for &p in levels {
-        let xy: Vec<(f64, f64)> = samples
-            .iter()
-            .filter(|s| (s.p_pa - p).abs() < 5e3 && s.vx_mps < vmin + 2.0)
-            .map(|s| (s.fz_n, s.rl_m))
-            .collect();
-        if let Some((a, b)) = starts::line_fit(&xy)
+    for xy in &per_level {
+        if let Some((a, b)) = starts::line_fit(xy)
             && a.is_finite()
             && a > 0.0
             && b < 0.0
@@ -98,16 +103,16 @@ fn r0_from(samples: &[&Sample], levels: &[f64]) -> Option<f64> {
 
 /// Stage 0: nominal values V0, P0, Fz0 and R0.
 pub fn nominal_values(data: &Dataset, opts: &FitOptions) -> Result<Nominal, FitError> {
-    let fm: Vec<&Sample> = data.select(|s| s.kind == DataKind::Sweep).map(|(_, s)| s).collect();
-    if fm.is_empty() {
+    let fm = || data.select(|s| s.kind == DataKind::Sweep).map(|(_, s)| s);
+    if fm().next().is_none() {
         return Err(FitError::NoData("no force & moment sweeps in the data".into()));
     }
     let mut notes = Vec::new();
-    let v0 = median(fm.iter().filter(|s| s.vx_mps > 2.0).map(|s| s.vx_mps).collect()).unwrap_or(16.6);
+    let v0 = median(fm().filter(|s| s.vx_mps > 2.0).map(|s| s.vx_mps).collect()).unwrap_or(16.6);
     let v0 = (v0 * 10.0).round() / 10.0;
     let levels = pressure_levels(data);
     let p0 = if levels.is_empty() {
-        median(fm.iter().map(|s| s.p_pa).collect()).unwrap_or(2.6e5)
+        median(fm().map(|s| s.p_pa).collect()).unwrap_or(2.6e5)
     } else {
         levels[levels.len() / 2]
     };
@@ -123,7 +128,7 @@ pub fn nominal_values(data: &Dataset, opts: &FitOptions) -> Result<Nominal, FitE
         (None, None) => {
             // The median load of the sweeps, to 10 N: the middle of the tested loads, where the
             // dfz terms are best determined.
-            let m = median(fm.iter().map(|s| s.fz_n).collect()).unwrap_or(5000.0);
+            let m = median(fm().map(|s| s.fz_n).collect()).unwrap_or(5000.0);
             ((m / 10.0).round() * 10.0, "median sweep load")
         }
     };
@@ -146,7 +151,7 @@ pub fn nominal_values(data: &Dataset, opts: &FitOptions) -> Result<Nominal, FitE
                 ),
             ),
             None => {
-                let r = fm.iter().map(|s| s.rl_m).filter(|r| r.is_finite()).fold(0.0, f64::max) + 0.01;
+                let r = fm().map(|s| s.rl_m).filter(|r| r.is_finite()).fold(0.0, f64::max) + 0.01;
                 (r, "no usable loaded radius against load: the largest loaded radius seen + 10 mm".to_owned())
             }
         }
