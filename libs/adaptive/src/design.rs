@@ -24,12 +24,36 @@ pub fn mean_variance(h: &DMatrix<f64>, cov: &DMatrix<f64>) -> f64 {
 }
 
 /// The covariance after adding measurements with sensitivities `j` (k×n), noise `sigma`:
-/// Σ − ΣJᵀ(σ²I + JΣJᵀ)⁻¹JΣ, symmetrised. Never larger than Σ (in the Loewner order).
+/// (Σ⁻¹ + JᵀJ/σ²)⁻¹, symmetrised. Never larger than Σ (in the Loewner order).
+///
+/// In information form whenever Σ is positive definite: the covariance form
+/// Σ − ΣJᵀ(σ²I + JΣJᵀ)⁻¹JΣ subtracts terms of Σ's size to leave one of σ²'s, and for a model
+/// that knows little yet (variances of 1e20 and more) round-off left garbage larger than Σ
+/// itself. The covariance form remains for a Σ that is only semi-definite.
 pub fn updated(cov: &DMatrix<f64>, j: &DMatrix<f64>, sigma: f64) -> DMatrix<f64> {
-    if j.nrows() == 0 || j.ncols() != cov.nrows() {
+    // Points the output does not depend on teach nothing, exactly.
+    if j.nrows() == 0 || j.ncols() != cov.nrows() || j.iter().all(|v| *v == 0.0) {
         return cov.clone();
     }
     let s2 = (sigma * sigma).max(1e-300);
+    let out = information_update(cov, j, s2).unwrap_or_else(|| covariance_update(cov, j, s2));
+    // Round-off can leave it a hair asymmetric or a diagonal a hair negative.
+    let mut out = (&out + out.transpose()) * 0.5;
+    for i in 0..out.nrows() {
+        if out[(i, i)] < 0.0 {
+            out[(i, i)] = 0.0;
+        }
+    }
+    out
+}
+
+fn information_update(cov: &DMatrix<f64>, j: &DMatrix<f64>, s2: f64) -> Option<DMatrix<f64>> {
+    let info = cov.clone().cholesky()?.inverse() + j.transpose() * j / s2;
+    let out = info.cholesky()?.inverse();
+    out.iter().all(|v| v.is_finite()).then_some(out)
+}
+
+fn covariance_update(cov: &DMatrix<f64>, j: &DMatrix<f64>, s2: f64) -> DMatrix<f64> {
     let a = j * cov; // k×n = JΣ
     let mut s = &a * j.transpose(); // k×k = JΣJᵀ
     for i in 0..s.nrows() {
@@ -42,15 +66,7 @@ pub fn updated(cov: &DMatrix<f64>, j: &DMatrix<f64>, sigma: f64) -> DMatrix<f64>
             None => return cov.clone(),
         },
     };
-    let mut out = cov - a.transpose() * solved;
-    // Round-off can leave it a hair asymmetric or a diagonal a hair negative.
-    out = (&out + out.transpose()) * 0.5;
-    for i in 0..out.nrows() {
-        if out[(i, i)] < 0.0 {
-            out[(i, i)] = 0.0;
-        }
-    }
-    out
+    cov - a.transpose() * solved
 }
 
 /// Reduction of the mean grid variance from adding `j` (never negative).

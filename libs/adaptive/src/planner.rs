@@ -262,7 +262,10 @@ impl Planner {
             })
             .collect();
         let e_full = rms(&full);
-        let mut target = self.cfg.target_ratio * e_full;
+        // More data never raises the variance: a full-run prediction above today's (or not a
+        // number) is round-off, and no reason to call the target met.
+        let full_is_sound = e_full.is_finite() && full.iter().zip(&now).all(|(f, n)| f <= &(n * (1.0 + 1e-9)));
+        let mut target = if full_is_sound { self.cfg.target_ratio * e_full } else { 0.0 };
         if let Some(abs) = self.cfg.target_error_pct {
             target = target.max(abs);
         }

@@ -274,3 +274,18 @@ fn a_target_without_a_model_is_bootstrapped_by_the_cheapest_sweep_that_measures_
     assert_eq!(back.used, p.state().used);
     assert!(back.decisions[0].value.is_nan() && back.decisions[0].name == d.name);
 }
+
+#[test]
+fn a_full_run_prediction_lost_to_round_off_never_closes_a_slot() {
+    // A model that knows almost nothing yet (variance 1e30 on every coefficient): the update
+    // in covariance form, Σ − ΣJᵀ(σ²I + JΣJᵀ)⁻¹JΣ, cancels 1e30-sized terms, and the predicted
+    // error of "every remaining sweep run" came out as large as today's (on a brush-tyre run,
+    // larger), which was read as the target already met: FreeRolling closed after 3 of its
+    // candidates. The information form keeps it exact; the planner also refuses a full-run
+    // prediction above today's.
+    let lib = gs2mf_library(&AdaptiveConfig::default());
+    let from = start(&lib, 0);
+    let view = Synth::new(1e30, 0.02);
+    let d = Planner::new(lib.clone(), AdaptiveConfig::default()).evaluate(0, from, &view, 1.0);
+    assert!(d.candidate.is_some() && d.full_error_pct < 1e-6 * d.error_pct, "{d:?}");
+}
