@@ -5,7 +5,7 @@
 //! physical), cross-validate every fitted stage over sweeps, and reach the accuracy on
 //! the held-out sweeps: FY/FX pure ≤ 3 %, FX/FY combined ≤ 5 %, MZ ≤ 8 % of peak.
 
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 use std::process::Command;
 
 fn root() -> PathBuf {
@@ -16,27 +16,35 @@ fn fixture(name: &str) -> String {
     root().join("tests/fixtures/ttc").join(name).display().to_string()
 }
 
+/// Runs `tyrerig fit ARGS --out DIR/TIR --report DIR/report`, which must exit 0; returns the
+/// report's `fit.json` and the command's stderr.
+fn fit(dir: &Path, tir: &str, args: &[&str]) -> (serde_json::Value, String) {
+    let report = dir.join("report");
+    let out = Command::new(env!("CARGO_BIN_EXE_tyrerig"))
+        .arg("fit")
+        .args(args)
+        .arg("--out")
+        .arg(dir.join(tir))
+        .arg("--report")
+        .arg(&report)
+        .output()
+        .expect("run tyrerig fit");
+    let stderr = String::from_utf8_lossy(&out.stderr).into_owned();
+    assert!(out.status.success(), "tyrerig fit exited {:?} (3 = non-physical):\n{stderr}", out.status.code());
+    let json =
+        serde_json::from_str(&std::fs::read_to_string(report.join("fit.json")).expect("fit.json")).expect("json");
+    (json, stderr)
+}
+
 #[test]
 fn race_brush_tyre_ttc_runs_fit_physical_and_within_the_limits() {
     let dir = PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join("brush_fit_race");
     let _ = std::fs::remove_dir_all(&dir);
     std::fs::create_dir_all(&dir).expect("scratch dir");
-    let tir = dir.join("race.tir");
-    let report = dir.join("report");
-    let out = Command::new(env!("CARGO_BIN_EXE_tyrerig"))
-        .args(["fit", &fixture("race_cornering.dat"), &fixture("race_drive_brake.dat")])
-        .args(["--validate", &fixture("race_drive_brake_tyre2.dat"), "--folds", "3"])
-        .arg("--out")
-        .arg(&tir)
-        .arg("--report")
-        .arg(&report)
-        .output()
-        .expect("run tyrerig fit");
-    let stderr = String::from_utf8_lossy(&out.stderr);
-    assert!(out.status.success(), "tyrerig fit exited {:?} (3 = non-physical):\n{stderr}", out.status.code());
-    assert!(tir.exists(), "no .tir written");
-    let json: serde_json::Value =
-        serde_json::from_str(&std::fs::read_to_string(report.join("fit.json")).expect("fit.json")).expect("json");
+    let (cornering, drive_brake, repeat) =
+        (fixture("race_cornering.dat"), fixture("race_drive_brake.dat"), fixture("race_drive_brake_tyre2.dat"));
+    let (json, stderr) = fit(&dir, "race.tir", &[&cornering, &drive_brake, "--validate", &repeat, "--folds", "3"]);
+    assert!(dir.join("race.tir").exists(), "no .tir written");
     assert!(json["nonphysical_stages"].as_array().is_some_and(Vec::is_empty), "{}", json["nonphysical_stages"]);
 
     let stage = |name: &str| {
@@ -100,18 +108,7 @@ fn drive_brake_run_alone_fits_combined_lateral_physically() {
     let dir = PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join("brush_fit_drive_brake_only");
     let _ = std::fs::remove_dir_all(&dir);
     std::fs::create_dir_all(&dir).expect("scratch dir");
-    let report = dir.join("report");
-    let out = Command::new(env!("CARGO_BIN_EXE_tyrerig"))
-        .args(["fit", &fixture("race_drive_brake.dat"), "--folds", "3", "--out"])
-        .arg(dir.join("db.tir"))
-        .arg("--report")
-        .arg(&report)
-        .output()
-        .expect("run tyrerig fit");
-    let stderr = String::from_utf8_lossy(&out.stderr);
-    assert!(out.status.success(), "tyrerig fit exited {:?} (3 = non-physical):\n{stderr}", out.status.code());
-    let json: serde_json::Value =
-        serde_json::from_str(&std::fs::read_to_string(report.join("fit.json")).expect("fit.json")).expect("json");
+    let (json, stderr) = fit(&dir, "db.tir", &[&fixture("race_drive_brake.dat"), "--folds", "3"]);
     let stages = json["stages"].as_array().expect("stages");
     let stage = |name: &str| stages.iter().find(|s| s["stage"] == name).unwrap_or_else(|| panic!("{name}: {stderr}"));
     for (name, limit) in [("fx_pure", 3.0), ("fx_combined", 5.0), ("fy_combined", 5.0), ("mz_combined", 8.0)] {
@@ -159,20 +156,7 @@ fn brush_road_gs2mf_fits_the_lateral_stages(seed: &str) {
         .output()
         .expect("run tyrerig run");
     assert!(run.status.success(), "tyrerig run: {}", String::from_utf8_lossy(&run.stderr));
-    let report = dir.join("report");
-    let out = Command::new(env!("CARGO_BIN_EXE_tyrerig"))
-        .arg("fit")
-        .arg(&log)
-        .args(["--folds", "0", "--out"])
-        .arg(dir.join("fit.tir"))
-        .arg("--report")
-        .arg(&report)
-        .output()
-        .expect("run tyrerig fit");
-    let stderr = String::from_utf8_lossy(&out.stderr);
-    assert!(out.status.success(), "tyrerig fit exited {:?}:\n{stderr}", out.status.code());
-    let json: serde_json::Value =
-        serde_json::from_str(&std::fs::read_to_string(report.join("fit.json")).expect("fit.json")).expect("json");
+    let (json, stderr) = fit(&dir, "fit.tir", &[&log.display().to_string(), "--folds", "0"]);
     let stages = json["stages"].as_array().expect("stages");
     // Fit NRMSE in % of peak (measured with the fix, seeds 1 and 2: 0.32 and 0.32, 2.47 and
     // 2.45, 0.23 and 0.23 %; with forward-difference Jacobians the offline fits of the same

@@ -244,9 +244,7 @@ const ONE_CHANNEL_STAGES: [&str; 7] =
 /// stands.
 fn model_signature(channel: Channel, params: &TyreParams, points: &[Point]) -> u64 {
     use std::hash::{Hash, Hasher};
-    let cols = crate::engine::InputColumns::of(points);
-    let mut values = vec![0.0; points.len()];
-    channel.eval_batch(params, &cols.batch(0..points.len()), &mut crate::engine::BatchScratch::default(), &mut values);
+    let values = channel.values_at(params, points);
     let mut h = std::collections::hash_map::DefaultHasher::new();
     values.len().hash(&mut h);
     for v in values {
