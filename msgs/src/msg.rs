@@ -624,3 +624,53 @@ pub struct ModelState {
 }
 
 crate::ros_message!(ModelState, "tyre_msgs", "ModelState");
+
+/// `tyre_msgs/StageCovariance`: one fitted stage of the live model in a `ModelCovariance`, the
+/// covariance of its coefficients.
+#[derive(Debug, Clone, PartialEq, Default, Serialize, Deserialize)]
+pub struct StageCovariance {
+    /// fy_pure, mz_pure, fx_pure, fx_combined, fy_combined, mz_combined, mx, ...
+    pub stage: String,
+    /// RMS residual of the stage, channel units (SI)
+    pub rmse: f64,
+    /// .tir keys, in the covariance's row order
+    pub keys: Vec<String>,
+    /// row-major keys x keys (delta method, serial-correlation inflation included); NaN/Inf
+    /// where a coefficient is not identified
+    pub covariance: Vec<f64>,
+    /// keys held at template values because the data lack levels of what they multiply (a
+    /// pressure or camber not tested yet)
+    pub held_for_want_of_data: Vec<String>,
+}
+
+crate::ros_message!(StageCovariance, "tyre_msgs", "StageCovariance");
+
+/// `tyre_msgs/ModelCovariance`: the live fit's whole model with the coefficient covariance of
+/// each fitted stage, published with every `ModelState` (same stamp and update_index).
+#[derive(Debug, Clone, PartialEq, Default, Serialize, Deserialize)]
+pub struct ModelCovariance {
+    /// as the model/state of the same update
+    pub header: Header,
+    /// as the model/state of the same update
+    pub update_index: u32,
+    /// false until the first successful fit (tir and stages then empty)
+    pub has_model: bool,
+    /// ProcedureState.sweep_index of the newest segment (not a warm-up) in the update's data
+    pub last_sweep_index: u32,
+    /// "section/sweep" of that segment
+    pub last_sweep: String,
+    /// the model as .tir text (FITTYP 61); reads back to identical values
+    pub tir: String,
+    /// nominal load the fit found (FNOMIN) \[N\]
+    pub fz0_n: f64,
+    /// nominal pressure (NOMPRES) \[Pa\]
+    pub p0_pa: f64,
+    /// nominal speed (LONGVL) \[m/s\]
+    pub v0_mps: f64,
+    /// unloaded radius (UNLOADED_RADIUS) \[m\]
+    pub r0_m: f64,
+    /// the fitted stages, in fit order
+    pub stages: Vec<StageCovariance>,
+}
+
+crate::ros_message!(ModelCovariance, "tyre_msgs", "ModelCovariance");

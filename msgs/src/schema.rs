@@ -73,6 +73,8 @@ definitions! {
     "tyre_msgs" / "ModelStage" => "msg/ModelStage.msg",
     "tyre_msgs" / "ModelMap" => "msg/ModelMap.msg",
     "tyre_msgs" / "ModelState" => "msg/ModelState.msg",
+    "tyre_msgs" / "StageCovariance" => "msg/StageCovariance.msg",
+    "tyre_msgs" / "ModelCovariance" => "msg/ModelCovariance.msg",
     "builtin_interfaces" / "Time" => "std/builtin_interfaces/msg/Time.msg",
     "std_msgs" / "Header" => "std/std_msgs/msg/Header.msg",
     "diagnostic_msgs" / "KeyValue" => "std/diagnostic_msgs/msg/KeyValue.msg",

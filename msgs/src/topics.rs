@@ -22,6 +22,8 @@ pub const DERIVED: &str = "channels/derived";
 pub const QUALITY_REPORT: &str = "quality/report";
 /// `tyre_msgs/ModelState`: live fit → all.
 pub const MODEL_STATE: &str = "model/state";
+/// `tyre_msgs/ModelCovariance`: live fit → sequencer (adaptive plan), any consumer.
+pub const MODEL_COVARIANCE: &str = "model/covariance";
 /// `diagnostic_msgs/DiagnosticArray`: every node → all (ROS convention).
 pub const DIAGNOSTICS: &str = "/diagnostics";
 /// `rosgraph_msgs/Clock`: the virtual rig on simulated time (ROS convention).

@@ -39,6 +39,8 @@ fn every_type_round_trips() {
     round_trip::<ModelStage>();
     round_trip::<ModelMap>();
     round_trip::<ModelState>();
+    round_trip::<StageCovariance>();
+    round_trip::<ModelCovariance>();
     round_trip::<Time>();
     round_trip::<Header>();
     round_trip::<KeyValue>();

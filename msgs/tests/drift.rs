@@ -36,6 +36,8 @@ fn no_rust_type_drifts_from_its_msg_file() {
         check::<ModelStage>(),
         check::<ModelMap>(),
         check::<ModelState>(),
+        check::<StageCovariance>(),
+        check::<ModelCovariance>(),
         check::<Time>(),
         check::<Header>(),
         check::<KeyValue>(),

@@ -191,7 +191,7 @@ def test_types_carry_ros2_dds_names_and_constants():
     assert types["RigSample"] is types["tyre_msgs/msg/RigSample"]
     # Every .msg found on disk became a class.
     assert set(definitions) <= set(types)
-    assert len(definitions) == 20
+    assert len(definitions) == 22
 
 
 @pytest.mark.parametrize("name", sorted(EXPECTED))
@@ -262,7 +262,7 @@ def test_mcap_file_round_trip_with_rust_schemas():
 
 def test_every_embedded_schema_parses_in_mcap_ros2():
     names = cargo_example("types").split()
-    assert len(names) == 20
+    assert len(names) == 22
     for name in names:
         decoders = generate_dynamic(name, rust_schema(name))
         assert name in decoders

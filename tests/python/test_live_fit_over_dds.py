@@ -70,6 +70,11 @@ def test_the_fit_node_publishes_a_model_after_every_segment_and_writes_it_at_the
     assert (schema.name, schema.encoding, channel.message_encoding) == ("tyre_msgs/msg/ModelState", "ros2msg", "cdr")
 
     states = [m.ros_msg for m in read_ros2_messages(str(log), topics=["/rig/model/state"])]
+    # With every model state, the same update's whole model and covariance (docs/live-fit.md).
+    covariances = [m.ros_msg for m in read_ros2_messages(str(log), topics=["/rig/model/covariance"])]
+    assert [c.update_index for c in covariances] == [s.update_index for s in states]
+    assert [c.has_model for c in covariances] == [s.error == "" for s in states], \
+        [(c.has_model, s.error) for c, s in zip(covariances, states)]
     # One update per completed segment (4 step steers, 1 sweep), then the final one.
     assert [s.update_index for s in states] == list(range(1, len(states) + 1)), [s.update_index for s in states]
     assert len(states) >= 6, len(states)

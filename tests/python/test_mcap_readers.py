@@ -25,6 +25,7 @@ TOPICS = {
     "/rig/channels/derived": "tyre_msgs/msg/DerivedMeasurement",
     "/rig/quality/report": "tyre_msgs/msg/QualityReport",
     "/rig/model/state": "tyre_msgs/msg/ModelState",
+    "/rig/model/covariance": "tyre_msgs/msg/ModelCovariance",
     "/diagnostics": "diagnostic_msgs/msg/DiagnosticArray",
     "/clock": "rosgraph_msgs/msg/Clock",
 }

@@ -11,7 +11,9 @@
 //! - [`design`]: the linearised I-optimal criterion: the reduction of the model's prediction
 //!   variance over the envelope grid if a candidate's points were added.
 //! - [`model`]: the model's sensitivities and covariance per target channel, from an
-//!   `mffit::FitResult` ([`model::FitView`]) or any other [`model::ModelView`].
+//!   live model snapshot ([`model::ModelSnapshot`], from an `mffit::FitResult` or `model/covariance`) through [`model::FitView`] or any other [`model::ModelView`].
+//! - [`wire`]: the model snapshot as `tyre_msgs/ModelCovariance` (`model/covariance`) and back,
+//!   for a sequencer node that plans over DDS.
 //! - [`planner`]: the choice (value per second, pressure changes grouped, severe sweeps last)
 //!   and the stop rule; its state goes into the sequencer's checkpoint.
 //!
@@ -22,10 +24,11 @@ pub mod design;
 pub mod library;
 pub mod model;
 pub mod planner;
+pub mod wire;
 
 pub use config::AdaptiveConfig;
 pub use library::{Candidate, Library, Slot};
-pub use model::{FitView, ModelView, Target, TargetModel};
+pub use model::{FitView, ModelSnapshot, ModelView, StageSnapshot, Target, TargetModel};
 pub use planner::{Decision, Planner, PlannerState};
 
 /// Serde for an `f64` that may be NaN ("not known"): JSON has no NaN and writes it as `null`,

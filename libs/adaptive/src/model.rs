@@ -10,7 +10,7 @@ use mffit::FitResult;
 use mffit::engine::Channel;
 use mffit::identify::is_structural;
 use mffit::prediction::{EnvelopeGrid, MapChannel};
-use mftyre::MfInput;
+use mftyre::{MfInput, TyreParams};
 use nalgebra::{DMatrix, DVector};
 use procedure::Setpoint;
 use procedure::setpoint::PA_PER_BAR;
@@ -130,12 +130,77 @@ impl ModelView for NoModel {
     }
 }
 
-/// A live fit's result as a [`ModelView`]: per target the stages' covariances plus, for every
+/// The live model as the planner needs it, owned: the whole parameter set, the nominal values
+/// the fit found, and per fitted stage the covariance of its coefficients. A fit in-process
+/// gives it ([`ModelSnapshot::of`]); over DDS it travels as `tyre_msgs/ModelCovariance` on
+/// `model/covariance`, so a sequencer node decides with the same model the headless run has.
+#[derive(Debug, Clone, PartialEq)]
+pub struct ModelSnapshot {
+    /// The fitted parameter set.
+    pub params: TyreParams,
+    /// FNOMIN the fit found \[N\].
+    pub fz0_n: f64,
+    /// NOMPRES \[Pa\].
+    pub p0_pa: f64,
+    /// LONGVL \[m/s\].
+    pub v0_mps: f64,
+    /// UNLOADED_RADIUS \[m\].
+    pub r0_m: f64,
+    /// The fitted stages (skipped ones left out), in fit order.
+    pub stages: Vec<StageSnapshot>,
+}
+
+/// One fitted stage of a [`ModelSnapshot`].
+#[derive(Debug, Clone, PartialEq)]
+pub struct StageSnapshot {
+    /// Stage name (`fy_pure`, ...).
+    pub stage: String,
+    /// RMS residual, channel units.
+    pub rmse: f64,
+    /// The coefficients fitted on the stage's main channel, in `covariance` order.
+    pub keys: Vec<String>,
+    /// Row-major keys × keys; non-finite where a coefficient is not identified.
+    pub covariance: Vec<f64>,
+    /// Keys held at template values because the data lack levels of what they multiply.
+    pub held_for_want_of_data: Vec<String>,
+}
+
+impl ModelSnapshot {
+    /// The snapshot of a fit.
+    pub fn of(result: &FitResult) -> Self {
+        let n = &result.nominal;
+        ModelSnapshot {
+            params: result.params.clone(),
+            fz0_n: n.fz0_n,
+            p0_pa: n.p0_pa,
+            v0_mps: n.v0_mps,
+            r0_m: n.r0_m,
+            stages: result
+                .stages
+                .iter()
+                .filter(|s| s.skipped.is_none())
+                .map(|s| StageSnapshot {
+                    stage: s.stage.clone(),
+                    rmse: s.rmse,
+                    keys: s.primary_keys.iter().map(|k| (*k).to_owned()).collect(),
+                    covariance: s.covariance.clone(),
+                    held_for_want_of_data: s.held.iter().filter(|h| is_structural(h)).map(|h| h.key.clone()).collect(),
+                })
+                .collect(),
+        }
+    }
+
+    fn stage(&self, name: &str) -> Option<&StageSnapshot> {
+        self.stages.iter().find(|s| s.stage == name)
+    }
+}
+
+/// A live model as a [`ModelView`]: per target the stages' covariances plus, for every
 /// coefficient held for want of data (a level not tested yet), a prior of
 /// [`AdaptiveConfig::held_prior_std`] — the uncertainty the planner should go after.
 #[derive(Debug)]
 pub struct FitView<'a> {
-    result: &'a FitResult,
+    model: &'a ModelSnapshot,
     targets: Vec<(Target, Option<Built>)>,
 }
 
@@ -147,13 +212,12 @@ struct Built {
 }
 
 impl<'a> FitView<'a> {
-    /// The view of `result`, its grid the live fit's standard envelope grid (pure channels)
+    /// The view of `model`, its grid the live fit's standard envelope grid (pure channels)
     /// and a combined-slip grid at the nominal pressure.
-    pub fn new(result: &'a FitResult, cfg: &AdaptiveConfig) -> Self {
-        let n = &result.nominal;
-        let grid = EnvelopeGrid::standard(n.fz0_n, n.p0_pa, n.v0_mps);
-        let targets = Target::ALL.iter().map(|&t| (t, build(result, t, &grid, cfg))).collect();
-        FitView { result, targets }
+    pub fn new(model: &'a ModelSnapshot, cfg: &AdaptiveConfig) -> Self {
+        let grid = EnvelopeGrid::standard(model.fz0_n, model.p0_pa, model.v0_mps);
+        let targets = Target::ALL.iter().map(|&t| (t, build(model, t, &grid, cfg))).collect();
+        FitView { model, targets }
     }
 
     fn built(&self, t: Target) -> Option<&Built> {
@@ -168,9 +232,11 @@ impl ModelView for FitView<'_> {
 
     fn sensitivities(&self, t: Target, points: &[Setpoint]) -> DMatrix<f64> {
         let Some(b) = self.built(t) else { return DMatrix::zeros(points.len(), 0) };
-        let r0 = self.result.nominal.r0_m;
-        let rows: Vec<DVector<f64>> =
-            points.iter().map(|sp| gradient(self.result, t.channel(), &b.keys, &input_of(sp, r0)) / b.scale).collect();
+        let r0 = self.model.r0_m;
+        let rows: Vec<DVector<f64>> = points
+            .iter()
+            .map(|sp| gradient(&self.model.params, t.channel(), &b.keys, &input_of(sp, r0)) / b.scale)
+            .collect();
         design::rows(&rows, b.keys.len())
     }
 }
@@ -190,12 +256,12 @@ pub fn input_of(sp: &Setpoint, r0_m: f64) -> MfInput {
 }
 
 /// ∂y/∂p by central differences, steps scaled to each coefficient as the fit's Jacobian does.
-fn gradient(result: &FitResult, ch: Channel, keys: &[String], x: &MfInput) -> DVector<f64> {
-    let mut p = result.params.clone();
+fn gradient(params: &TyreParams, ch: Channel, keys: &[String], x: &MfInput) -> DVector<f64> {
+    let mut p = params.clone();
     DVector::from_iterator(
         keys.len(),
         keys.iter().map(|key| {
-            let v = result.params.get(key).unwrap_or(0.0);
+            let v = params.get(key).unwrap_or(0.0);
             let h = 1e-6 * v.abs().max(1e-3);
             let _ = p.set(key, v + h);
             let up = ch.eval(&p, x);
@@ -208,14 +274,14 @@ fn gradient(result: &FitResult, ch: Channel, keys: &[String], x: &MfInput) -> DV
     )
 }
 
-fn grid_inputs(result: &FitResult, t: Target, grid: &EnvelopeGrid) -> Vec<MfInput> {
-    let r0 = result.nominal.r0_m;
+fn grid_inputs(model: &ModelSnapshot, t: Target, grid: &EnvelopeGrid) -> Vec<MfInput> {
+    let r0 = model.r0_m;
     match t {
         Target::FyPure => grid.inputs(MapChannel::FyPure, r0),
         Target::MzPure | Target::MxPure => grid.inputs(MapChannel::MzPure, r0),
         Target::FxPure => grid.inputs(MapChannel::FxPure, r0),
         Target::FxCombined | Target::FyCombined => {
-            let p0 = result.nominal.p0_pa;
+            let p0 = model.p0_pa;
             let mut out = Vec::new();
             for &fz in &grid.fz_n {
                 for sa in [-8.0f64, -4.0, -1.0, 1.0, 4.0, 8.0] {
@@ -238,22 +304,22 @@ fn grid_inputs(result: &FitResult, t: Target, grid: &EnvelopeGrid) -> Vec<MfInpu
     }
 }
 
-fn build(result: &FitResult, t: Target, grid: &EnvelopeGrid, cfg: &AdaptiveConfig) -> Option<Built> {
+fn build(model: &ModelSnapshot, t: Target, grid: &EnvelopeGrid, cfg: &AdaptiveConfig) -> Option<Built> {
     let mut keys: Vec<String> = Vec::new();
     let mut blocks: Vec<(usize, Vec<f64>, usize)> = Vec::new(); // (offset, cov, n)
     let mut priors: Vec<usize> = Vec::new();
     for name in t.stages() {
-        let rep = result.stages.iter().find(|s| s.stage == *name && s.skipped.is_none())?;
-        let n = rep.primary_keys.len();
+        let rep = model.stage(name)?;
+        let n = rep.keys.len();
         if n == 0 || rep.covariance.len() != n * n {
             return None;
         }
         blocks.push((keys.len(), rep.covariance.clone(), n));
-        keys.extend(rep.primary_keys.iter().map(|k| (*k).to_owned()));
-        for h in rep.held.iter().filter(|h| is_structural(h)) {
-            if !keys.contains(&h.key) && result.params.get(&h.key).is_some() {
+        keys.extend(rep.keys.iter().cloned());
+        for key in &rep.held_for_want_of_data {
+            if !keys.contains(key) && model.params.get(key).is_some() {
                 priors.push(keys.len());
-                keys.push(h.key.clone());
+                keys.push(key.clone());
             }
         }
     }
@@ -278,15 +344,15 @@ fn build(result: &FitResult, t: Target, grid: &EnvelopeGrid, cfg: &AdaptiveConfi
     for &i in &priors {
         cov[(i, i)] = cfg.held_prior_std * cfg.held_prior_std;
     }
-    let inputs = grid_inputs(result, t, grid);
+    let inputs = grid_inputs(model, t, grid);
     let ch = t.channel();
-    let scale = inputs.iter().map(|x| ch.eval(&result.params, x).abs()).filter(|v| v.is_finite()).fold(0.0, f64::max);
+    let scale = inputs.iter().map(|x| ch.eval(&model.params, x).abs()).filter(|v| v.is_finite()).fold(0.0, f64::max);
     if scale <= 0.0 {
         return None;
     }
-    let rows: Vec<DVector<f64>> = inputs.iter().map(|x| gradient(result, ch, &keys, x) / scale).collect();
+    let rows: Vec<DVector<f64>> = inputs.iter().map(|x| gradient(&model.params, ch, &keys, x) / scale).collect();
     let g = design::rows(&rows, n);
-    let rmse = result.stages.iter().find(|s| s.stage == t.residual_stage()).map_or(f64::NAN, |s| s.rmse);
+    let rmse = model.stage(t.residual_stage()).map_or(f64::NAN, |s| s.rmse);
     let sigma = if rmse.is_finite() && rmse > 0.0 { rmse / scale } else { 0.01 };
     Some(Built { keys, scale, model: TargetModel { cov, h: design::grid_weight(&g), sigma } })
 }

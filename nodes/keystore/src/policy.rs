@@ -220,6 +220,7 @@ mod tests {
         assert!(g.publish.contains(&"rt/rig/setpoint".to_owned()));
         assert!(!g.publish.contains(&"rt/rig/procedure/command".to_owned()));
         assert!(g.subscribe.contains(&"rt/rig/procedure/command".to_owned()));
+        assert!(g.subscribe.contains(&"rt/rig/model/covariance".to_owned()), "the adaptive plan's input");
         assert!(g.publish.contains(&"rr/rig/sequencer/*".to_owned()));
         assert!(g.subscribe.contains(&"rq/rig/sequencer/*".to_owned()));
         // /clock is both a suite topic (recorder) and plumbing: listed once.

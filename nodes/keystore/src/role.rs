@@ -20,7 +20,8 @@ pub enum Role {
     Sequencer,
     /// Live channels and the quality monitor (the `quality` node).
     Quality,
-    /// The live MF-Tyre fit (the `fit` node): reads samples and states, publishes the model.
+    /// The live MF-Tyre fit (the `fit` node): reads samples and states, publishes the model and
+    /// its coefficient covariance.
     Fit,
     /// The recorder: subscribes to every topic, publishes only its alarms on `/diagnostics`.
     Recorder,
@@ -95,7 +96,7 @@ impl Role {
             Role::Thermal => &[T::ThermalState, T::Diagnostics],
             Role::Sequencer => &[T::RigSetpoint, T::ProcedureState, T::Diagnostics],
             Role::Quality => &[T::LiveChannels, T::SweepSummary, T::Derived, T::QualityReport, T::Diagnostics],
-            Role::Fit => &[T::ModelState, T::Diagnostics],
+            Role::Fit => &[T::ModelState, T::ModelCovariance, T::Diagnostics],
             // The recorder's only output besides its log: its loss and silent-stream alarms
             // (loss is never silent, docs/reliability.md).
             Role::Recorder => &[T::Diagnostics],
@@ -109,7 +110,8 @@ impl Role {
         match self {
             Role::Rig => &[T::RigSetpoint],
             Role::Thermal => &[T::RigSample, T::ProcedureState],
-            Role::Sequencer => &[T::RigSample, T::ThermalState, T::ProcedureCommand],
+            // The adaptive plan (`plan = "adaptive"`) plans on the live fit's model and covariance.
+            Role::Sequencer => &[T::RigSample, T::ThermalState, T::ProcedureCommand, T::ModelCovariance],
             // The quality node also follows the live fit's model (monitor::model_watch).
             Role::Quality => &[T::RigSample, T::ProcedureState, T::ModelState],
             Role::Fit => &[T::RigSample, T::ProcedureState],
@@ -138,6 +140,8 @@ mod tests {
         assert_eq!(Role::Recorder.publishes(), [T::Diagnostics], "the recorder only reports on /diagnostics");
         assert!(Role::Monitor.publishes().is_empty());
         assert_eq!(Role::Recorder.subscribes(), &SuiteTopic::ALL);
+        assert_eq!(publishers(T::ModelCovariance), [Role::Fit], "only the live fit publishes its covariance");
+        assert!(Role::Sequencer.subscribes().contains(&T::ModelCovariance), "the adaptive plan reads the covariance");
     }
 
     #[test]

@@ -4,12 +4,13 @@
 use std::collections::VecDeque;
 use std::sync::Arc;
 
+use adaptive::ModelSnapshot;
 use mffit::logs::Segmenter;
 use mffit::prediction::{EnvelopeGrid, PredictionMap, prediction_maps_since};
 use mffit::stages::UPSTREAM_NOTE;
 use mffit::{DataKind, Dataset, FitResult, Segment, WarmStart};
 use tyre_msgs::builtin_interfaces::Time;
-use tyre_msgs::{ModelState, ProcedureState, RigSample};
+use tyre_msgs::{ModelCovariance, ModelState, ProcedureState, RigSample};
 
 use crate::config::LiveFitConfig;
 use crate::state::model_state;
@@ -43,6 +44,13 @@ pub struct LiveFit {
     /// Segments completed since the last update.
     new_segments: usize,
     last_segment: String,
+    /// `ProcedureState.sweep_index` of the segment being recorded, and of the newest completed
+    /// one that makes an update due: `model/covariance` says which data its model has seen, so
+    /// an adaptive sequencer knows when the model includes the sweep it just ran.
+    open_sweep_index: u32,
+    last_sweep_index: u32,
+    /// The latest finished update: stamp, index, sweep index and name of its newest segment.
+    last_done: Option<(Time, u32, u32, String)>,
     stamp: Time,
     previous: Option<Arc<FitResult>>,
     /// The uncertainty maps of `previous`.
@@ -67,6 +75,9 @@ impl LiveFit {
             data: Arc::new(data),
             new_segments: 0,
             last_segment: String::new(),
+            open_sweep_index: 0,
+            last_sweep_index: 0,
+            last_done: None,
             stamp: Time::default(),
             previous: None,
             maps: Vec::new(),
@@ -102,17 +113,22 @@ impl LiveFit {
             self.current = self.states.pop_front();
         }
         let Some(st) = self.current.as_ref() else { return };
+        let (open_index, state_index) = (self.open_sweep_index, st.sweep_index);
         if let Some(seg) = self.segmenter.push(st, s) {
             self.stamp = s.header.stamp;
-            self.add(seg);
+            self.add(seg, open_index);
+        }
+        if self.segmenter.in_segment() {
+            self.open_sweep_index = state_index;
         }
     }
 
-    fn add(&mut self, seg: Segment) {
+    fn add(&mut self, seg: Segment, sweep_index: u32) {
         // Warm-up sweeps are never fitted; they do not make an update due.
         if seg.kind != DataKind::WarmUp {
             self.new_segments += 1;
             self.last_segment = format!("{}/{}", seg.section, seg.sweep);
+            self.last_sweep_index = sweep_index;
         }
         Arc::make_mut(&mut self.data).segments.push(seg);
     }
@@ -135,6 +151,30 @@ impl LiveFit {
     /// The latest successful fit.
     pub fn latest(&self) -> Option<&FitResult> {
         self.previous.as_deref()
+    }
+
+    /// The latest finished update's index and the `sweep_index` of the newest segment in its
+    /// data (what `model/covariance` says).
+    pub fn latest_reach(&self) -> Option<(u32, u32)> {
+        self.last_done.as_ref().map(|(_, index, sweep_index, _)| (*index, *sweep_index))
+    }
+
+    /// The `model/covariance` that goes with the latest update's `model/state` (same stamp and
+    /// index): the whole model with each stage's covariance, and how far its data reach. Before
+    /// the first update: no model, index 0.
+    pub fn model_covariance(&self) -> ModelCovariance {
+        let mut msg = match self.previous.as_deref() {
+            Some(result) => adaptive::wire::to_msg(&ModelSnapshot::of(result)),
+            None => ModelCovariance::default(),
+        };
+        if let Some((stamp, index, sweep_index, last_sweep)) = &self.last_done {
+            msg.header.stamp = *stamp;
+            msg.update_index = *index;
+            msg.last_sweep_index = *sweep_index;
+            msg.last_sweep = last_sweep.clone();
+        }
+        msg.header.frame_id = "iso_w".into();
+        msg
     }
 
     /// Refits on all data so far, warm-started from the previous update, and returns the model
@@ -161,6 +201,7 @@ impl LiveFit {
             p0_pa: self.cfg.p0_pa,
             index: self.updates,
             last_segment: self.last_segment.clone(),
+            last_sweep_index: self.last_sweep_index,
             stamp: self.stamp,
             final_update: false,
         }
@@ -181,6 +222,7 @@ impl LiveFit {
         if self.grid.is_none() {
             self.grid = done.grid.clone();
         }
+        self.last_done = Some((done.stamp, done.index, done.last_sweep_index, done.last_segment.clone()));
         let mut st = model_state(self.previous.as_deref(), self.grid.as_ref(), &self.maps);
         st.header.stamp = done.stamp;
         st.header.frame_id = "iso_w".into();
@@ -208,7 +250,7 @@ impl LiveFit {
             self.current = Some(st);
         }
         if let Some(seg) = self.segmenter.finish() {
-            self.add(seg);
+            self.add(seg, self.open_sweep_index);
         }
         self.completed = true;
         let mut job = self.begin_update();
@@ -243,6 +285,7 @@ pub struct UpdateJob {
     p0_pa: Option<f64>,
     index: u32,
     last_segment: String,
+    last_sweep_index: u32,
     stamp: Time,
     final_update: bool,
 }
@@ -255,6 +298,7 @@ pub struct UpdateDone {
     maps: Vec<mffit::prediction::PredictionMap>,
     index: u32,
     last_segment: String,
+    last_sweep_index: u32,
     stamp: Time,
     final_update: bool,
     sweeps_used: u32,
@@ -311,6 +355,7 @@ impl UpdateJob {
             maps,
             index: self.index,
             last_segment: self.last_segment,
+            last_sweep_index: self.last_sweep_index,
             stamp: self.stamp,
             final_update: self.final_update,
             sweeps_used: segs.iter().filter(|s| matches!(s.kind, DataKind::Sweep | DataKind::OnCentre)).count() as u32,

@@ -15,7 +15,9 @@
 //! Topics (the DDS shell, `shell.rs`, feature `dds`, maps them to core calls):
 //! - in: `sample` (`tyre_msgs/RigSample`) → [`LiveFit::on_sample`]; `procedure/state`
 //!   (`tyre_msgs/ProcedureState`) → [`LiveFit::on_procedure_state`];
-//! - out: `model/state` (`tyre_msgs/ModelState`, transient-local, keep last 1).
+//! - out: `model/state` (`tyre_msgs/ModelState`, transient-local, keep last 1) and, with it,
+//!   `model/covariance` (`tyre_msgs/ModelCovariance` from [`LiveFit::model_covariance`]: the
+//!   whole model and each stage's covariance, which the adaptive plan's sequencer plans with).
 //!
 //! The core reads no clock and does no I/O: its time is the stamps of the messages, and an
 //! update's wall time is the fitter's own measurement.

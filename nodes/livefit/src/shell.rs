@@ -1,5 +1,5 @@
-//! The fit node's DDS shell: samples and procedure states in, `model/state` out, the `.tir` and
-//! report written when the procedure completes.
+//! The fit node's DDS shell: samples and procedure states in, `model/state` and
+//! `model/covariance` out, the `.tir` and report written when the procedure completes.
 //!
 //! An update runs on a blocking thread while the node keeps taking samples (a sweep's data must
 //! not wait in a reader's history while the model is refitted). When sweeps complete faster
@@ -10,7 +10,7 @@ use futures::StreamExt;
 use node_runtime::{LossWatch, RosNode, RuntimeError, Shutdown, SuiteTopic};
 use tokio::task::JoinHandle;
 use tyre_msgs::diagnostic_msgs::DiagnosticArray;
-use tyre_msgs::{ModelState, ProcedureState, RigSample};
+use tyre_msgs::{ModelCovariance, ModelState, ProcedureState, RigSample};
 
 use crate::LiveFitConfig;
 use crate::core::{LiveFit, Trigger, UpdateDone};
@@ -40,6 +40,7 @@ pub enum FitNodeError {
 pub async fn run(mut node: RosNode, cfg: FitNodeConfig, shutdown: Shutdown) -> Result<(), FitNodeError> {
     let mut core = LiveFit::new(cfg.fit.clone());
     let state_pub = node.publisher::<ModelState>(SuiteTopic::ModelState)?;
+    let covariance_pub = node.publisher::<ModelCovariance>(SuiteTopic::ModelCovariance)?;
     let diag_pub = node.publisher::<DiagnosticArray>(SuiteTopic::Diagnostics)?;
     let samples = node.subscription::<RigSample>(SuiteTopic::RigSample)?;
     let states = node.subscription::<ProcedureState>(SuiteTopic::ProcedureState)?;
@@ -78,6 +79,9 @@ pub async fn run(mut node: RosNode, cfg: FitNodeConfig, shutdown: Shutdown) -> R
                 }
                 if let Err(e) = state_pub.publish(st.clone()) {
                     tracing::warn!("model/state publish: {e:?}");
+                }
+                if let Err(e) = covariance_pub.publish(core.model_covariance()) {
+                    tracing::warn!("model/covariance publish: {e:?}");
                 }
                 if st.final_update {
                     if let Some(result) = core.latest() {

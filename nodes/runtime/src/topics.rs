@@ -10,9 +10,9 @@ use ros2_client::{
 };
 use std::time::Duration;
 use tyre_msgs::{
-    DerivedMeasurement, LiveChannels, ModelState, ProcedureCommand, ProcedureState, QualityReport, RigSample,
-    RigSetpoint, RosMessage, SweepSummary, ThermalState, diagnostic_msgs::DiagnosticArray, rosgraph_msgs::Clock,
-    topics as names,
+    DerivedMeasurement, LiveChannels, ModelCovariance, ModelState, ProcedureCommand, ProcedureState, QualityReport,
+    RigSample, RigSetpoint, RosMessage, SweepSummary, ThermalState, diagnostic_msgs::DiagnosticArray,
+    rosgraph_msgs::Clock, topics as names,
 };
 
 /// QoS presets. Names say what the topic is used for, not how DDS does it.
@@ -109,6 +109,7 @@ pub enum SuiteTopic {
     Derived,
     QualityReport,
     ModelState,
+    ModelCovariance,
     Diagnostics,
     Clock,
 }
@@ -121,7 +122,7 @@ pub trait TopicVisitor {
 }
 
 impl SuiteTopic {
-    pub const ALL: [SuiteTopic; 12] = [
+    pub const ALL: [SuiteTopic; 13] = [
         SuiteTopic::RigSample,
         SuiteTopic::RigSetpoint,
         SuiteTopic::ProcedureState,
@@ -132,6 +133,7 @@ impl SuiteTopic {
         SuiteTopic::Derived,
         SuiteTopic::QualityReport,
         SuiteTopic::ModelState,
+        SuiteTopic::ModelCovariance,
         SuiteTopic::Diagnostics,
         SuiteTopic::Clock,
     ];
@@ -149,6 +151,7 @@ impl SuiteTopic {
             SuiteTopic::Derived => (names::DERIVED, Qos::Events),
             SuiteTopic::QualityReport => (names::QUALITY_REPORT, Qos::Events),
             SuiteTopic::ModelState => (names::MODEL_STATE, Qos::State),
+            SuiteTopic::ModelCovariance => (names::MODEL_COVARIANCE, Qos::State),
             SuiteTopic::Diagnostics => (names::DIAGNOSTICS, Qos::Diagnostics),
             SuiteTopic::Clock => (names::CLOCK, Qos::Clock),
         };
@@ -197,6 +200,7 @@ impl SuiteTopic {
             SuiteTopic::Derived => visitor.visit::<DerivedMeasurement>(self),
             SuiteTopic::QualityReport => visitor.visit::<QualityReport>(self),
             SuiteTopic::ModelState => visitor.visit::<ModelState>(self),
+            SuiteTopic::ModelCovariance => visitor.visit::<ModelCovariance>(self),
             SuiteTopic::Diagnostics => visitor.visit::<DiagnosticArray>(self),
             SuiteTopic::Clock => visitor.visit::<Clock>(self),
         }
@@ -216,6 +220,9 @@ mod tests {
         assert_eq!(SuiteTopic::from_full_name("/rig/channels/live", "/rig"), Some(SuiteTopic::LiveChannels));
         assert_eq!(SuiteTopic::RigSample.ros_type_name(), "tyre_msgs/msg/RigSample");
         assert_eq!(SuiteTopic::Diagnostics.ros_type_name(), "diagnostic_msgs/msg/DiagnosticArray");
+        assert_eq!(SuiteTopic::ModelCovariance.full_name("/rig"), "/rig/model/covariance");
+        assert_eq!(SuiteTopic::ModelCovariance.ros_type_name(), "tyre_msgs/msg/ModelCovariance");
+        assert_eq!(SuiteTopic::ModelCovariance.spec().qos, Qos::State, "transient-local, like model/state");
     }
 
     #[test]

@@ -12,11 +12,18 @@
 //!   on change and at 2 Hz) from [`core::SequencerOutput`]
 //! - writes [`core::Checkpoint`] to disk on [`core::SequencerEvent::CheckpointChanged`]; after a
 //!   restart, [`core::Sequencer::resume`] continues at the interrupted sweep.
+//! - with `plan = "adaptive"`: subscribes `model/covariance` (`ModelCovariance`) → [`PlanModel`];
+//!   at a slot, once the model has seen the last sweep, [`core::Sequencer::plan_next`] decides
+//!   and each decision goes to `/diagnostics` ([`decision_status`]).
 
 pub mod config;
 pub mod core;
+pub mod decisions;
+pub mod plan_model;
 #[cfg(feature = "dds")]
 pub mod shell;
 
 pub use config::{PlanKind, SequencerConfig};
 pub use core::{Checkpoint, CommandRejected, Sequencer, SequencerError, SequencerEvent, SequencerOutput};
+pub use decisions::{ModelRef, decision_status};
+pub use plan_model::{PlanModel, PlanModelReady};

@@ -10,7 +10,9 @@
 //! safe in that same cycle and `/diagnostics` says so. Lost or malformed input on any topic is
 //! counted and announced (`node_runtime::LossWatch`).
 
-use crate::{Checkpoint, Sequencer, SequencerConfig, SequencerEvent};
+use crate::{Checkpoint, PlanModel, PlanModelReady, Sequencer, SequencerConfig, SequencerEvent, decision_status};
+use adaptive::FitView;
+use adaptive::model::NoModel;
 use futures::StreamExt;
 use node_runtime::{LossWatch, RosNode, RuntimeError, Shutdown, SuiteTopic};
 use procedure::{RunInputs, SweepStyle};
@@ -18,7 +20,9 @@ use serde::Deserialize;
 use std::path::{Path, PathBuf};
 use std::time::{Duration, Instant};
 use tyre_msgs::diagnostic_msgs::{DiagnosticArray, DiagnosticStatus, KeyValue};
-use tyre_msgs::{ProcedureCommand, ProcedureState, RigSample, RigSetpoint, ThermalState, std_msgs::Header};
+use tyre_msgs::{
+    ModelCovariance, ProcedureCommand, ProcedureState, RigSample, RigSetpoint, ThermalState, std_msgs::Header,
+};
 
 /// `[node.config]` of a sequencer node.
 #[derive(Debug, Clone, Deserialize)]
@@ -56,6 +60,29 @@ pub struct SequencerNodeConfig {
     /// safe and an alarm raised \[s\].
     #[serde(default = "default_rig_silent")]
     pub rig_silent_after_s: f64,
+    /// With `plan = "adaptive"`: wall time a slot waits for a `model/covariance` that has seen
+    /// the last sweep before it decides with the newest model it has \[s\]
+    /// (`docs/adaptive-plan.md`, Over DDS).
+    #[serde(default = "default_plan_model_wait")]
+    pub plan_model_wait_s: f64,
+}
+
+fn default_plan_model_wait() -> f64 {
+    120.0
+}
+
+impl SequencerNodeConfig {
+    /// Checks the core's settings and the node's own.
+    pub fn validate(&self) -> Result<(), crate::config::ConfigError> {
+        self.core.validate()?;
+        for (key, v) in [("rig_silent_after_s", self.rig_silent_after_s), ("plan_model_wait_s", self.plan_model_wait_s)]
+        {
+            if !(v.is_finite() && v >= 0.0) {
+                return Err(crate::config::ConfigError { key, message: format!("expected a number ≥ 0, got {v}") });
+            }
+        }
+        Ok(())
+    }
 }
 
 fn default_rig_silent() -> f64 {
@@ -141,6 +168,30 @@ fn write_checkpoint(path: &Path, cp: &Checkpoint) -> Result<(), SequencerNodeErr
     std::fs::rename(&tmp, path).map_err(|e| err(e.to_string()))
 }
 
+/// Notes the procedure states of `out` (which data sweeps ran) for the adaptive plan's model wait.
+fn observe(out: &crate::SequencerOutput, plan_model: &mut PlanModel) {
+    if let Some(st) = &out.state {
+        plan_model.on_state(st);
+    }
+}
+
+/// A `/diagnostics` record about the adaptive plan's model (a stale decision, a bad message).
+fn plan_status(node: &str, level: u8, message: String, rig_time_s: f64) -> DiagnosticArray {
+    DiagnosticArray {
+        header: Header {
+            stamp: tyre_msgs::builtin_interfaces::Time::from_secs_f64(rig_time_s),
+            frame_id: String::new(),
+        },
+        status: vec![DiagnosticStatus {
+            level,
+            name: format!("{node}: adaptive_model"),
+            message,
+            hardware_id: "sequencer".into(),
+            values: vec![KeyValue { key: "rig_time_s".into(), value: format!("{rig_time_s:.3}") }],
+        }],
+    }
+}
+
 /// Runs the sequencer until shutdown (or, with `exit_when_done`, the end of the procedure).
 pub async fn run(mut node: RosNode, cfg: SequencerNodeConfig, shutdown: Shutdown) -> Result<(), SequencerNodeError> {
     let doc = procedure::load(&cfg.procedure).map_err(|e| SequencerNodeError::Procedure(e.to_string()))?;
@@ -155,13 +206,7 @@ pub async fn run(mut node: RosNode, cfg: SequencerNodeConfig, shutdown: Shutdown
         limits: cfg.core.envelope,
     };
     let plan = procedure::expand(&doc, &inputs).map_err(|e| SequencerNodeError::Procedure(e.to_string()))?;
-    if cfg.core.plan == crate::PlanKind::Adaptive {
-        // The planner needs the live fit's coefficient covariance in-process (ModelState carries
-        // only its maps): the adaptive plan runs headless (`tyrerig run --headless --plan adaptive`).
-        return Err(SequencerNodeError::Core(
-            "sequencer config `plan = \"adaptive\"`: the adaptive plan runs headless only (`tyrerig run --headless --plan adaptive`)".into(),
-        ));
-    }
+    let adaptive = cfg.core.plan == crate::PlanKind::Adaptive;
     let checkpoint = match &cfg.checkpoint {
         Some(p) => read_checkpoint(p)?,
         None => None,
@@ -169,9 +214,9 @@ pub async fn run(mut node: RosNode, cfg: SequencerNodeConfig, shutdown: Shutdown
     let mut seq = match &checkpoint {
         Some(cp) if !cp.complete => {
             tracing::info!(next_step = cp.next_step, "resuming from checkpoint");
-            Sequencer::resume(plan, cfg.core, cp)
+            Sequencer::resume_for_config(plan, cfg.core, cp)
         }
-        _ => Sequencer::new(plan, cfg.core),
+        _ => Sequencer::for_config(plan, cfg.core),
     }
     .map_err(|e| SequencerNodeError::Core(e.to_string()))?;
 
@@ -185,6 +230,13 @@ pub async fn run(mut node: RosNode, cfg: SequencerNodeConfig, shutdown: Shutdown
     let mut samples = Box::pin(samples.async_stream());
     let mut thermal = Box::pin(thermal.async_stream());
     let mut commands = Box::pin(commands.async_stream());
+    // The adaptive plan decides with the live fit's model (`model/covariance`); a fixed plan
+    // does not subscribe (its DDS Security permissions need not allow it).
+    let models = if adaptive { Some(node.subscription::<ModelCovariance>(SuiteTopic::ModelCovariance)?) } else { None };
+    let mut models = models.as_ref().map(|m| Box::pin(m.async_stream()));
+    let model_topic = node.topic_name(SuiteTopic::ModelCovariance);
+    let mut plan_model = PlanModel::default();
+    let mut plan_wait_since: Option<Instant> = None;
     let mut latest_thermal: Option<ThermalState> = None;
     let mut now_s = 0.0;
     let mut pending_start = cfg.autostart;
@@ -247,6 +299,7 @@ pub async fn run(mut node: RosNode, cfg: SequencerNodeConfig, shutdown: Shutdown
                     && at.elapsed() >= silent_after
                 {
                     let out = seq.on_rig_silent(at.elapsed().as_secs_f64());
+                    observe(&out, &mut plan_model);
                     if handle(out, &seq)? && cfg.exit_when_done { break; }
                 }
             },
@@ -255,12 +308,24 @@ pub async fn run(mut node: RosNode, cfg: SequencerNodeConfig, shutdown: Shutdown
                     loss.on_message(&command_topic, &info, None);
                     match seq.on_command(now_s, &cmd) {
                     Ok(out) => {
+                        observe(&out, &mut plan_model);
                         if handle(out, &seq)? && cfg.exit_when_done { break; }
                     }
                     Err(rejected) => tracing::warn!("command refused: {rejected}"),
                     }
                 }
                 Some(Err(e)) => loss.on_read_error(&command_topic, &e),
+                None => break,
+            },
+            item = async { models.as_mut().expect("guarded").next().await }, if models.is_some() => match item {
+                Some(Ok((msg, info))) => {
+                    loss.on_message(&model_topic, &info, None);
+                    if let Err(e) = plan_model.on_model(&msg) {
+                        tracing::error!("{e}; the planner keeps the previous model");
+                        let _ = diag_pub.publish(plan_status(&node_name, DiagnosticStatus::ERROR, e.to_string(), now_s));
+                    }
+                }
+                Some(Err(e)) => loss.on_read_error(&model_topic, &e),
                 None => break,
             },
             item = thermal.next() => match item {
@@ -285,11 +350,40 @@ pub async fn run(mut node: RosNode, cfg: SequencerNodeConfig, shutdown: Shutdown
                         }
                     }
                     let out = seq.step(now_s, latest_thermal.as_ref(), Some(&s));
+                    observe(&out, &mut plan_model);
                     if handle(out, &seq)? && cfg.exit_when_done { break; }
                 }
                 Some(Err(e)) => loss.on_read_error(&sample_topic, &e),
                 None => break,
             },
+        }
+        if adaptive && seq.awaiting_plan().is_some() {
+            let since = *plan_wait_since.get_or_insert_with(Instant::now);
+            if let PlanModelReady::Decide { model, stale } =
+                plan_model.ready(since.elapsed().as_secs_f64(), cfg.plan_model_wait_s)
+            {
+                plan_wait_since = None;
+                if let Some(why) = stale {
+                    tracing::warn!("adaptive plan: {why}");
+                    let _ = diag_pub.publish(plan_status(&node_name, DiagnosticStatus::WARN, why, now_s));
+                }
+                let planner_cfg = seq.planner().map(|p| *p.config()).unwrap_or_default();
+                let decided_with = model.and(plan_model.latest());
+                let out = match model {
+                    Some(m) => seq.plan_next(now_s, &FitView::new(m, &planner_cfg)),
+                    None => seq.plan_next(now_s, &NoModel),
+                };
+                for ev in &out.events {
+                    if let Some(d) = decision_status(ev, now_s, decided_with) {
+                        tracing::info!("adaptive plan: {}", d.status.first().map_or("", |s| s.message.as_str()));
+                        let _ = diag_pub.publish(d);
+                    }
+                }
+                observe(&out, &mut plan_model);
+                if handle(out, &seq)? && cfg.exit_when_done {
+                    break;
+                }
+            }
         }
         loss.announce(&diag_pub, tyre_msgs::builtin_interfaces::Time::from_secs_f64(now_s));
     }

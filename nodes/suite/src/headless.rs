@@ -373,6 +373,7 @@ impl Headless {
                 let st = fit.update();
                 self.live_fit_walls.push(st.update_wall_s);
                 sink.put(t, Outgoing::Model(&st))?;
+                sink.put(t, Outgoing::Covariance(&fit.model_covariance()))?;
                 sink.put(t, Outgoing::Diagnostics(&self.model_watch.on_model_state(&st).diagnostics))?;
             }
 
@@ -452,6 +453,7 @@ impl Headless {
         if let Some(fit) = self.live_fit.as_mut() {
             let st = fit.finish();
             sink.put(t_end, Outgoing::Model(&st))?;
+            sink.put(t_end, Outgoing::Covariance(&fit.model_covariance()))?;
             sink.put(t_end, Outgoing::Diagnostics(&self.model_watch.on_model_state(&st).diagnostics))?;
         }
         if first_tyre_mounted || self.wear_true.is_empty() {

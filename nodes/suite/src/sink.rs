@@ -3,8 +3,8 @@
 use mcaplog::{LogWriteError, McapLog, McapLogOptions, codec};
 use std::{collections::BTreeMap, path::Path};
 use tyre_msgs::{
-    DerivedMeasurement, LiveChannels, ModelState, ProcedureState, QualityReport, RigSample, RigSetpoint, RosMessage,
-    SweepSummary, ThermalState, diagnostic_msgs::DiagnosticArray, topics,
+    DerivedMeasurement, LiveChannels, ModelCovariance, ModelState, ProcedureState, QualityReport, RigSample,
+    RigSetpoint, RosMessage, SweepSummary, ThermalState, diagnostic_msgs::DiagnosticArray, topics,
 };
 
 /// One message leaving the cores, tagged with its topic.
@@ -20,6 +20,7 @@ pub enum Outgoing<'a> {
     Quality(&'a QualityReport),
     Diagnostics(&'a DiagnosticArray),
     Model(&'a ModelState),
+    Covariance(&'a ModelCovariance),
 }
 
 impl Outgoing<'_> {
@@ -36,6 +37,7 @@ impl Outgoing<'_> {
             Outgoing::Quality(_) => topics::QUALITY_REPORT,
             Outgoing::Diagnostics(_) => topics::DIAGNOSTICS,
             Outgoing::Model(_) => topics::MODEL_STATE,
+            Outgoing::Covariance(_) => topics::MODEL_COVARIANCE,
         }
     }
 }
@@ -133,6 +135,7 @@ impl MessageSink for McapSink {
             Outgoing::Quality(m) => self.write(topic, t_s, m),
             Outgoing::Diagnostics(m) => self.write(topic, t_s, m),
             Outgoing::Model(m) => self.write(topic, t_s, m),
+            Outgoing::Covariance(m) => self.write(topic, t_s, m),
         }
     }
 }

@@ -75,7 +75,8 @@ pub struct RunArgs {
     pub fit: bool,
     /// fixed (every step of the procedure) | adaptive (docs/adaptive-plan.md: the fixed parts,
     /// the other sweeps chosen by the live model's predicted variance reduction per rig second
-    /// until the model is predicted as good as the full procedure's; turns on --fit; headless).
+    /// until the model is predicted as good as the full procedure's; turns on --fit; over DDS the
+    /// sequencer decides with the fit node's `model/covariance`).
     #[arg(long, default_value = "fixed")]
     pub plan: sequencer::PlanKind,
     /// With --plan adaptive: stop a slot when its predicted error is within this factor of the
@@ -155,11 +156,6 @@ fn fit_output(args: &RunArgs) -> livefit::output::ModelOutput {
 
 pub fn run(args: RunArgs) -> anyhow::Result<()> {
     if !args.headless {
-        if args.plan == sequencer::PlanKind::Adaptive {
-            anyhow::bail!(
-                "--plan adaptive runs headless only: the planner needs the live fit's covariance in-process (add --headless)"
-            );
-        }
         return run_dds(&args);
     }
     if args.foxglove.is_some() {
@@ -272,6 +268,9 @@ fn run_dds(args: &RunArgs) -> anyhow::Result<()> {
     use toml::Value as V;
 
     let spec = spec_of(args);
+    // The adaptive plan decides with the live fit's model: the fit node runs too.
+    let adaptive = args.plan == sequencer::PlanKind::Adaptive;
+    let fit = args.fit || adaptive;
     // The headless suite validates every input and gives the metadata the log carries.
     let headless = Headless::new(&spec, thermal::ThermalConfig::default(), sequencer::SequencerConfig::default())?;
     let mut metadata = headless.metadata(&spec);
@@ -300,7 +299,7 @@ fn run_dds(args: &RunArgs) -> anyhow::Result<()> {
         rig.push(("effects", V::String(e.clone())));
     }
     // Thermal, sequencer, quality and recorder (and the fit) read the samples: none may miss the start.
-    rig.push(("wait_for_subscribers", V::Integer(if args.fit { 5 } else { 4 })));
+    rig.push(("wait_for_subscribers", V::Integer(if fit { 5 } else { 4 })));
     if let Some(m) = args.max_speed {
         rig.push(("max_time_scale", V::Float(m)));
     }
@@ -326,7 +325,14 @@ fn run_dds(args: &RunArgs) -> anyhow::Result<()> {
         ("min_pressure_bar", V::Float(inputs.limits.min_pressure_bar)),
         ("max_pressure_bar", V::Float(inputs.limits.max_pressure_bar)),
     ]);
-    sequencer.push(("core", V::Table(table(&[("envelope", V::Table(envelope))]))));
+    let mut core = vec![("envelope", V::Table(envelope))];
+    if adaptive {
+        core.push(("plan", V::String("adaptive".into())));
+        if let Some(r) = args.target_ratio {
+            core.push(("adaptive", V::Table(table(&[("target_ratio", V::Float(r))]))));
+        }
+    }
+    sequencer.push(("core", V::Table(table(&core))));
     let md: toml::Table = metadata
         .iter()
         .map(|(k, m)| (k.clone(), V::Table(m.iter().map(|(a, b)| (a.clone(), V::String(b.clone()))).collect())))
@@ -346,7 +352,7 @@ fn run_dds(args: &RunArgs) -> anyhow::Result<()> {
         NodeEntry { name: "quality".into(), kind: "quality".into(), config: table(&quality) },
         NodeEntry { name: "virtual_rig".into(), kind: "virtual_rig".into(), config: table(&rig) },
     ];
-    if args.fit {
+    if fit {
         let out = fit_output(args);
         let mut output = vec![];
         if let Some(t) = &out.tir {

@@ -186,7 +186,7 @@ fn typed_config_check(entry: &NodeEntry) -> anyhow::Result<()> {
         }
         Some(NodeKind::Sequencer) => {
             let c: sequencer::shell::SequencerNodeConfig = config_of(entry)?;
-            c.core.validate()?;
+            c.validate()?;
         }
         Some(NodeKind::Quality) => {
             let c: monitor::shell::QualityNodeConfig = config_of(entry)?;

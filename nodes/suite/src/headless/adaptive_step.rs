@@ -5,11 +5,9 @@
 use super::{Headless, HeadlessError};
 use crate::sink::{MessageSink, Outgoing};
 use crate::summary::SummaryBuilder;
-use adaptive::FitView;
 use adaptive::model::NoModel;
+use adaptive::{FitView, ModelSnapshot};
 use sequencer::SequencerEvent;
-use tyre_msgs::diagnostic_msgs::{DiagnosticArray, DiagnosticStatus, KeyValue};
-use tyre_msgs::std_msgs::Header;
 
 impl Headless {
     /// Asks the sequencer's planner for the next sweep with the live fit's latest model (none
@@ -24,8 +22,13 @@ impl Headless {
         let cfg = *self.seq.planner().map(|p| p.config()).ok_or_else(|| {
             HeadlessError::Sequencer("a slot of the adaptive plan without an adaptive planner".into())
         })?;
-        let out = match self.live_fit.as_ref().and_then(|f| f.latest()) {
-            Some(result) => self.seq.plan_next(t, &FitView::new(result, &cfg)),
+        let fit = self.live_fit.as_ref();
+        let decided_with = fit
+            .filter(|f| f.latest().is_some())
+            .and_then(|f| f.latest_reach())
+            .map(|(update_index, last_sweep_index)| sequencer::ModelRef { update_index, last_sweep_index });
+        let out = match fit.and_then(|f| f.latest()) {
+            Some(result) => self.seq.plan_next(t, &FitView::new(&ModelSnapshot::of(result), &cfg)),
             None => self.seq.plan_next(t, &NoModel),
         };
         if let Some(st) = &out.state {
@@ -41,50 +44,10 @@ impl Headless {
         for ev in &out.events {
             sum.on_event(ev);
             completed |= matches!(ev, SequencerEvent::Completed { .. });
-            if let Some(d) = decision_status(ev, t) {
+            if let Some(d) = sequencer::decision_status(ev, t, decided_with) {
                 sink.put(t, Outgoing::Diagnostics(&d))?;
             }
         }
         Ok(completed)
     }
-}
-
-/// The `/diagnostics` record of an adaptive decision: what was chosen and why.
-fn decision_status(ev: &SequencerEvent, t: f64) -> Option<DiagnosticArray> {
-    let kv = |k: &str, v: String| KeyValue { key: k.into(), value: v };
-    let (message, values) = match ev {
-        SequencerEvent::SweepChosen { slot, name, value, cost_s, error_pct, error_after_pct, target_pct, reason } => (
-            format!("chose {name}: {reason}"),
-            vec![
-                kv("slot", slot.to_string()),
-                kv("sweep", name.clone()),
-                kv("value_pct2", format!("{value:.6}")),
-                kv("cost_s", format!("{cost_s:.1}")),
-                kv("predicted_error_pct", format!("{error_pct:.4}")),
-                kv("predicted_error_after_pct", format!("{error_after_pct:.4}")),
-                kv("target_pct", format!("{target_pct:.4}")),
-            ],
-        ),
-        SequencerEvent::SlotClosed { slot, sweeps, error_pct, reason } => (
-            format!("slot {slot} closed after {sweeps} sweeps: {reason}"),
-            vec![
-                kv("slot", slot.to_string()),
-                kv("sweeps", sweeps.to_string()),
-                kv("predicted_error_pct", format!("{error_pct:.4}")),
-            ],
-        ),
-        _ => return None,
-    };
-    let mut values = values;
-    values.push(kv("rig_time_s", format!("{t:.3}")));
-    Some(DiagnosticArray {
-        header: Header::iso_w(t),
-        status: vec![DiagnosticStatus {
-            level: DiagnosticStatus::OK,
-            name: "sequencer: adaptive".into(),
-            message,
-            hardware_id: "sequencer".into(),
-            values,
-        }],
-    })
 }
