@@ -105,11 +105,16 @@ def test_the_sequencer_node_plans_with_the_fit_nodes_model(tyrerig, domain_id, t
     assert "PDY1" in fy.keys and all(v == v for v in fy.covariance[:: len(fy.keys) + 1]), fy.keys
     reach = [m.last_sweep_index for m in models]
     assert reach == sorted(reach), reach
+    # The reach is the sweep the model's newest segment came from, as procedure/state named it.
+    running = [m.ros_msg for m in read_ros2_messages(str(dds_log), topics=["/rig/procedure/state"])
+               if m.ros_msg.phase == 1]
+    names = {st.sweep_index: f"{st.section}/{st.sweep_name}" for st in running}
+    for m in models:
+        assert names[m.last_sweep_index] == m.last_sweep, (m.update_index, m.last_sweep_index, m.last_sweep)
 
     # Every decision was made with a model that had seen every data sweep before it.
-    sweeps = [(m.ros_msg.header.stamp.sec + m.ros_msg.header.stamp.nanosec * 1e-9, m.ros_msg.sweep_index)
-              for m in read_ros2_messages(str(dds_log), topics=["/rig/procedure/state"])
-              if m.ros_msg.phase == 1 and m.ros_msg.section != "warmup"]
+    sweeps = [(st.header.stamp.sec + st.header.stamp.nanosec * 1e-9, st.sweep_index) for st in running
+              if st.section != "warmup"]
     dds = decisions(dds_log)
     assert dds, "no adaptive decision on /diagnostics"
     with_a_model = 0
