@@ -26,4 +26,4 @@ pub mod shell;
 pub use config::{PlanKind, SequencerConfig};
 pub use core::{Checkpoint, CommandRejected, Sequencer, SequencerError, SequencerEvent, SequencerOutput};
 pub use decisions::{ModelRef, decision_status};
-pub use plan_model::{PlanModel, PlanModelReady};
+pub use plan_model::{PlanModel, PlanModelReady, SweepsRun};

@@ -1,13 +1,14 @@
 //! Which model an adaptive sequencer decides with at a slot when the live fit runs in another
 //! node: the latest `model/covariance`, once its data include every sweep run before the slot.
 //!
-//! Headless, the fit's update after a sweep runs before the sequencer's next step, so the
-//! planner always sees the model of all data so far. Over DDS the fit node updates on its own
-//! time (0.02–5 s per update), so the sequencer holds the rig at zero slip until a model arrives
-//! whose `last_sweep_index` reaches the newest data sweep it ran; then it decides with the same
-//! model the headless run would have had. A fit node that is gone or stuck must not hold the rig
-//! for ever: after `wait_s` of waiting (wall time, measured by the shell) it decides with the
-//! newest model it has and says so.
+//! The fit closes a segment on the first sample after it, and updates then: when a slot follows
+//! a data step directly, the sequencer reaches it before the model has seen that step. Both
+//! ways of running wait for it ([`SweepsRun`]): headless, the update follows within a sample;
+//! over DDS the fit node updates on its own time (0.02–5 s per update), so the sequencer holds
+//! the rig at zero slip until a model arrives whose `last_sweep_index` reaches the newest data
+//! sweep it ran, and decides with the model the headless run has at that point. A fit node that
+//! is gone or stuck must not hold the rig for ever: after `wait_s` of waiting (wall time,
+//! measured by the shell) it decides with the newest model it has and says so.
 //!
 //! Pure: the shell passes the wait so far; no clock is read here.
 
@@ -16,6 +17,40 @@ use adaptive::wire::{WireError, from_msg};
 use mffit::DataKind;
 use tyre_msgs::{ModelCovariance, ProcedureState};
 
+/// The data sweeps the sequencer has run, as its procedure states say: what a model must have
+/// seen to be the model of all data so far.
+#[derive(Debug, Default, Clone, Copy)]
+pub struct SweepsRun {
+    /// `sweep_index` of the newest data sweep (not a warm-up: those are never fitted).
+    newest: Option<u32>,
+}
+
+impl SweepsRun {
+    /// Notes a procedure state the sequencer published.
+    pub fn on_state(&mut self, st: &ProcedureState) {
+        if st.phase == ProcedureState::PHASE_SWEEP
+            && !st.sweep_name.is_empty()
+            && DataKind::from_names(&st.section, &st.sweep_name) != DataKind::WarmUp
+        {
+            self.newest = Some(self.newest.map_or(st.sweep_index, |n| n.max(st.sweep_index)));
+        }
+    }
+
+    /// The newest data sweep's index, if one has run.
+    pub fn newest(&self) -> Option<u32> {
+        self.newest
+    }
+
+    /// True when a model whose data reach sweep `reach` has seen every data sweep run so far.
+    pub fn covered_by(&self, reach: Option<u32>) -> bool {
+        match (self.newest, reach) {
+            (None, _) => true,
+            (Some(needed), Some(reach)) => reach >= needed,
+            (Some(_), None) => false,
+        }
+    }
+}
+
 /// The live model as the sequencer node has received it.
 #[derive(Debug, Default)]
 pub struct PlanModel {
@@ -23,8 +58,7 @@ pub struct PlanModel {
     model: Option<ModelSnapshot>,
     /// Update index and data reach of the newest message.
     latest: Option<(u32, u32)>,
-    /// `sweep_index` of the newest data sweep (not a warm-up) the sequencer has run.
-    needed: Option<u32>,
+    sweeps: SweepsRun,
 }
 
 /// What to do at a slot.
@@ -40,12 +74,7 @@ pub enum PlanModelReady<'a> {
 impl PlanModel {
     /// Notes a procedure state the sequencer published: a data sweep raises the reach needed.
     pub fn on_state(&mut self, st: &ProcedureState) {
-        if st.phase == ProcedureState::PHASE_SWEEP
-            && !st.sweep_name.is_empty()
-            && DataKind::from_names(&st.section, &st.sweep_name) != DataKind::WarmUp
-        {
-            self.needed = Some(self.needed.map_or(st.sweep_index, |n| n.max(st.sweep_index)));
-        }
+        self.sweeps.on_state(st);
     }
 
     /// Takes a `model/covariance`. An older update than the newest held (a late repair) is
@@ -68,11 +97,7 @@ impl PlanModel {
 
     /// True when the newest model's data include every data sweep run so far.
     pub fn current(&self) -> bool {
-        match (self.needed, self.latest) {
-            (None, _) => true,
-            (Some(needed), Some((_, reach))) => reach >= needed,
-            (Some(_), None) => false,
-        }
+        self.sweeps.covered_by(self.latest.map(|(_, reach)| reach))
     }
 
     /// At a slot, after `waited_s` of holding for it: wait on, or decide with which model.
@@ -87,7 +112,7 @@ impl PlanModel {
             Some((index, reach)) => format!("update {index}, data to sweep {reach}"),
             None => "no model/covariance at all".to_owned(),
         };
-        let needed = self.needed.unwrap_or(0);
+        let needed = self.sweeps.newest().unwrap_or(0);
         PlanModelReady::Decide {
             model: self.model.as_ref(),
             stale: Some(format!(

@@ -67,6 +67,9 @@ pub struct Headless {
     live_fit_walls: Vec<f64>,
     /// The monitor's view of the live fit (its `/diagnostics`, as the quality node's).
     model_watch: monitor::ModelWatch,
+    /// The data sweeps run so far: at a slot the adaptive plan decides once the live model has
+    /// seen all of them (`sequencer::plan_model`).
+    sweeps_run: sequencer::SweepsRun,
 }
 
 impl std::fmt::Debug for Headless {
@@ -159,6 +162,10 @@ fn tyre_info(cfg: &RigConfig, tyre: &VirtualTyre) -> Result<TyreInfo, HeadlessEr
     Ok(info)
 }
 
+/// Rig time a slot of the adaptive plan waits, at most, for the live fit to update on the data
+/// step before it (it needs one sample; a segment too short to keep never comes).
+const PLAN_MODEL_WAIT_S: f64 = 1.0;
+
 impl Headless {
     /// Builds the cores for `spec`.
     pub fn new(spec: &RunSpec, thermal_cfg: ThermalConfig, seq_cfg: SequencerConfig) -> Result<Self, HeadlessError> {
@@ -194,6 +201,7 @@ impl Headless {
             live_fit: None,
             live_fit_walls: Vec::new(),
             model_watch: monitor::ModelWatch::new(),
+            sweeps_run: sequencer::SweepsRun::default(),
         })
     }
 
@@ -343,6 +351,8 @@ impl Headless {
         let mut last_seq = 0;
         let mut refusing = false;
         let mut in_sweep = false;
+        // Rig time a slot has waited for the live model to see the sweep before it.
+        let mut plan_wait_from: Option<f64> = None;
         loop {
             let Some(local) = self.rig.step() else { continue };
             let sample = self.retime(local);
@@ -379,6 +389,7 @@ impl Headless {
 
             let out = self.seq.step(t, Some(&th.state), Some(&sample));
             if let Some(st) = &out.state {
+                self.sweeps_run.on_state(st);
                 self.gate.on_procedure_state(t, st);
                 self.pipeline.on_procedure_state(st);
                 if let Some(fit) = self.live_fit.as_mut() {
@@ -390,10 +401,17 @@ impl Headless {
             }
             let mut done = false;
             if out.events.iter().any(|e| matches!(e, SequencerEvent::PlanNeeded { .. })) {
-                // The adaptive plan decides with the live model as it is now: the update after
-                // the previous sweep ran in this loop when that sweep's segment closed. Closing
-                // a slot at the plan's end completes the run.
-                done = self.plan_next(t, sink, &mut sum)?;
+                // The adaptive plan decides with the model of all data so far. The fit closes a
+                // segment on the sample after it and updates in this loop at once, so a slot
+                // right after a data step waits a sample or two (the sequencer holds); a
+                // segment the fit dropped (too short) must not hold it longer than a second.
+                // Closing a slot at the plan's end completes the run.
+                let reach = self.live_fit.as_ref().and_then(|f| f.latest_reach()).map(|(_, sweep)| sweep);
+                let since = *plan_wait_from.get_or_insert(t);
+                if self.live_fit.is_none() || self.sweeps_run.covered_by(reach) || t - since >= PLAN_MODEL_WAIT_S {
+                    plan_wait_from = None;
+                    done = self.plan_next(t, sink, &mut sum)?;
+                }
             }
             for ev in &out.events {
                 sum.on_event(ev);

@@ -1,6 +1,7 @@
 //! The adaptive plan end to end, headless: virtual rig, thermal gate, sequencer, live fit. A
-//! small procedure keeps it short: a warm-up and a heating sweep (fixed), then four force &
-//! moment candidates at two pressures.
+//! small procedure keeps it short: a warm-up, a heating sweep and a rolling-radius hold (fixed),
+//! then four force & moment candidates at two pressures. The slot follows the hold directly (no
+//! thermal pause between): the plan must still decide with a model that has seen the hold.
 
 use std::path::Path;
 use suite::sink::{MessageSink, Outgoing};
@@ -38,6 +39,16 @@ threshold_deg = 4.0
 loads = [1.0]
 
 [[section]]
+name = "rolling_radius"
+pressure = "mid"
+
+[[section.step]]
+kind = "rolling_radius"
+loads = [0.6, 1.4]
+speeds_mps = [16.6]
+hold_s = 4.0
+
+[[section]]
 name = "force_moment"
 pressures = ["low", "high"]
 
@@ -53,16 +64,26 @@ loads = [0.6, 1.4]
 #[derive(Default)]
 struct Capture {
     decisions: Vec<String>,
+    /// `sweep_index` of the newest data step (not a warm-up) the sequencer has run.
+    newest_data_sweep: Option<u32>,
+    /// Per decision: the newest data sweep run before it, and the sweep its model's data reach.
+    reach: Vec<(Option<u32>, Option<u32>)>,
 }
 
 impl MessageSink for Capture {
     fn put(&mut self, _t: f64, msg: Outgoing<'_>) -> Result<(), mcaplog::LogWriteError> {
-        if let Outgoing::Diagnostics(d) = msg {
-            for s in &d.status {
-                if s.name == "sequencer: adaptive" {
+        match msg {
+            Outgoing::Procedure(st) if st.phase == tyre_msgs::ProcedureState::PHASE_SWEEP && st.section != "warmup" => {
+                self.newest_data_sweep = Some(st.sweep_index);
+            }
+            Outgoing::Diagnostics(d) => {
+                for s in d.status.iter().filter(|s| s.name == "sequencer: adaptive") {
                     self.decisions.push(s.message.clone());
+                    let model = s.values.iter().find(|kv| kv.key == "model_last_sweep_index");
+                    self.reach.push((self.newest_data_sweep, model.map(|kv| kv.value.parse().unwrap())));
                 }
             }
+            _ => {}
         }
         Ok(())
     }
@@ -111,6 +132,20 @@ fn adaptive_plan_chooses_runs_logs_and_repeats_its_decisions() {
     }
     assert_eq!(cap.decisions.len(), a.adaptive.len());
     assert!(cap.decisions.iter().any(|m| m.contains("chose ")));
+    // Every decision with a model was made with one that had seen every data step before it,
+    // the first too (it follows the rolling-radius hold without a pause).
+    let first_hold = ran.iter().position(|r| r.contains("RollingRadius")).expect("the hold ran") as u32;
+    assert!(cap.reach[0].0 >= Some(first_hold), "{:?}", cap.reach);
+    for (i, (newest, model)) in cap.reach.iter().enumerate() {
+        if let Some(model) = model {
+            assert!(
+                Some(*model) >= *newest,
+                "decision {i} made with a model of data to sweep {model}: {:?}",
+                cap.reach
+            );
+        }
+    }
+    assert!(cap.reach[0].1.is_some(), "the heating sweep gives a model before the first decision");
     // Same config and seed: the same decisions.
     let (b, _, _) = run(dir.path());
     let names = |s: &RunSummary| s.adaptive.iter().map(|c| c.sweep.clone()).collect::<Vec<_>>();

@@ -32,6 +32,7 @@ impl Headless {
             None => self.seq.plan_next(t, &NoModel),
         };
         if let Some(st) = &out.state {
+            self.sweeps_run.on_state(st);
             self.gate.on_procedure_state(t, st);
             self.pipeline.on_procedure_state(st);
             if let Some(fit) = self.live_fit.as_mut() {
