@@ -384,6 +384,9 @@ pub async fn run(mut node: RosNode, cfg: SequencerNodeConfig, shutdown: Shutdown
                     break;
                 }
             }
+        } else {
+            // Not at a slot (or paused there): the next slot's wait starts afresh.
+            plan_wait_since = None;
         }
         loss.announce(&diag_pub, tyre_msgs::builtin_interfaces::Time::from_secs_f64(now_s));
     }
