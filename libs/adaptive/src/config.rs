@@ -14,6 +14,10 @@ pub struct AdaptiveConfig {
     /// An absolute target instead (% of peak): a slot also stops when its predicted error is
     /// at most this. `None`: only the ratio.
     pub target_error_pct: Option<f64>,
+    /// A slot stops only when its target is met at this many decisions in a row (a sweep runs
+    /// between them): the predicted error jumps between updates, and one low reading is no
+    /// reason to stop (`docs/adaptive-plan.md`, Limits). 1 stops at the first.
+    pub target_confirmations: u32,
     /// At most this fraction of the full procedure's predicted cost of a slot's candidates is
     /// spent on the slot (the rig-time budget); 1.0 = no limit beyond the full content.
     pub budget_fraction: f64,
@@ -40,6 +44,7 @@ impl Default for AdaptiveConfig {
         Self {
             target_ratio: 1.15,
             target_error_pct: None,
+            target_confirmations: 2,
             budget_fraction: 1.0,
             points_per_sweep: 24,
             held_prior_std: 0.3,
@@ -79,6 +84,9 @@ impl AdaptiveConfig {
         }
         if !(self.min_relative_gain.is_finite() && (0.0..1.0).contains(&self.min_relative_gain)) {
             return Err(("min_relative_gain", format!("expected 0 ≤ x < 1, got {}", self.min_relative_gain)));
+        }
+        if self.target_confirmations < 1 {
+            return Err(("target_confirmations", "expected at least 1".into()));
         }
         if self.points_per_sweep < 2 {
             return Err(("points_per_sweep", format!("expected at least 2, got {}", self.points_per_sweep)));

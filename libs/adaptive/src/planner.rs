@@ -62,6 +62,9 @@ pub struct PlannerState {
     pub spent_s: Vec<f64>,
     /// Every decision.
     pub decisions: Vec<Decision>,
+    /// Per slot: decisions in a row at which its target was met (reset when it is not).
+    #[serde(default)]
+    pub target_met: Vec<u32>,
 }
 
 /// A state that does not belong to the library.
@@ -159,6 +162,12 @@ impl Planner {
     /// `pause_scale`: observed pauses over the pause model's so far (1 without evidence).
     pub fn decide(&mut self, slot: usize, from: Setpoint, view: &dyn ModelView, pause_scale: f64) -> Decision {
         let d = self.evaluate(slot, from, view, pause_scale);
+        // Count the decisions in a row at which the slot's target was met (as `evaluate` did).
+        if self.state.target_met.len() <= slot {
+            self.state.target_met.resize(slot + 1, 0);
+        }
+        let met = &mut self.state.target_met[slot];
+        *met = if d.error_pct <= d.target_pct { *met + 1 } else { 0 };
         match d.candidate {
             Some(id) => {
                 self.state.used.push(id);
@@ -269,9 +278,14 @@ impl Planner {
         if let Some(abs) = self.cfg.target_error_pct {
             target = target.max(abs);
         }
-        if e_now <= target {
+        let met = if e_now <= target { self.state.target_met.get(slot).copied().unwrap_or(0) + 1 } else { 0 };
+        let needed = self.cfg.target_confirmations.max(1);
+        if met >= needed {
+            let in_a_row = if needed > 1 { format!(", {met} decisions in a row") } else { String::new() };
             return close(
-                format!("predicted error {e_now:.3} % ≤ target {target:.3} % (full procedure: {e_full:.3} %)"),
+                format!(
+                    "predicted error {e_now:.3} % ≤ target {target:.3} % (full procedure: {e_full:.3} %){in_a_row}"
+                ),
                 e_now,
                 e_full,
                 target,
@@ -324,6 +338,8 @@ impl Planner {
             },
         };
         let c = &self.lib.candidates[pick.id];
+        let confirm_note =
+            if met > 0 { format!("; target met {met} of {needed} decisions in a row") } else { String::new() };
         let pressure_note = if (c.pressure_bar - from.pressure_bar).abs() > 1e-9 {
             format!(", pressure {} → {} bar", fmt(from.pressure_bar), fmt(c.pressure_bar))
         } else {
@@ -340,7 +356,7 @@ impl Planner {
             full_error_pct: e_full,
             target_pct: target,
             reason: format!(
-                "{tier}: {:.4} (%²) in {:.0} s{pressure_note}; predicted error {e_now:.3} → {:.3} % (target {target:.3} %)",
+                "{tier}: {:.4} (%²) in {:.0} s{pressure_note}; predicted error {e_now:.3} → {:.3} % (target {target:.3} %){confirm_note}",
                 pick.value, pick.cost_s, pick.error_after_pct
             ),
         }

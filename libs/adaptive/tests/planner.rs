@@ -195,13 +195,14 @@ fn the_stop_rule_fires_on_the_target_and_on_the_budget() {
     let lib = gs2mf_library(&AdaptiveConfig::default());
     let from = start(&lib, 0);
     // Noise so large that no sweep can change the prediction: the full run's predicted error
-    // equals today's, so the target is met at once.
+    // equals today's, so the target is met at once (stopping at the first reading).
+    let once = AdaptiveConfig { target_confirmations: 1, ..AdaptiveConfig::default() };
     let noisy = Synth::new(0.01, 1e6);
-    let d = Planner::new(lib.clone(), AdaptiveConfig::default()).evaluate(0, from, &noisy, 1.0);
+    let d = Planner::new(lib.clone(), once).evaluate(0, from, &noisy, 1.0);
     assert!(d.candidate.is_none() && d.reason.contains("≤ target"), "{d:?}");
     // An absolute target above today's error stops too.
     let view = Synth::new(0.01, 0.02);
-    let cfg = AdaptiveConfig { target_error_pct: Some(1e6), ..AdaptiveConfig::default() };
+    let cfg = AdaptiveConfig { target_error_pct: Some(1e6), ..once };
     let d = Planner::new(lib.clone(), cfg).evaluate(0, from, &view, 1.0);
     assert!(d.candidate.is_none() && d.reason.contains("≤ target"), "{d:?}");
     // A budget of 5 % of the slot's full cost admits a sweep or two, then stops.
@@ -288,4 +289,42 @@ fn a_full_run_prediction_lost_to_round_off_never_closes_a_slot() {
     let view = Synth::new(1e30, 0.02);
     let d = Planner::new(lib.clone(), AdaptiveConfig::default()).evaluate(0, from, &view, 1.0);
     assert!(d.candidate.is_some() && d.full_error_pct < 1e-6 * d.error_pct, "{d:?}");
+}
+
+#[test]
+fn one_low_reading_does_not_close_a_slot_two_in_a_row_do() {
+    // The live model's predicted error jumps between updates; by default the target must be met
+    // at two decisions in a row, with a sweep between them.
+    // A generous target (10⁶ × the full run's prediction) is met on a model that knows a little,
+    // while sweeps still teach it something; on one that knows nothing (variance 10³⁰) it is not.
+    let cfg = AdaptiveConfig { target_ratio: 1e6, ..AdaptiveConfig::default() };
+    let lib = gs2mf_library(&cfg);
+    let met = Synth::new(0.01, 0.02);
+    let unsure = Synth::new(1e30, 0.02);
+    let mut p = Planner::new(lib.clone(), cfg);
+    let mut from = start(&lib, 0);
+    let mut step = |p: &mut Planner, view: &Synth| {
+        let d = p.decide(0, from, view, 1.0);
+        if let Some(id) = d.candidate {
+            from = lib.candidates[id].end();
+        }
+        d
+    };
+    let d = step(&mut p, &met);
+    assert!(d.candidate.is_some() && d.reason.contains("target met 1 of 2"), "{d:?}");
+    // A reading above the target starts the count again.
+    let d = step(&mut p, &unsure);
+    assert!(d.candidate.is_some() && !d.reason.contains("target met"), "{d:?}");
+    let d = step(&mut p, &met);
+    assert!(d.candidate.is_some() && d.reason.contains("target met 1 of 2"), "{d:?}");
+    // The count survives a checkpoint.
+    let json = serde_json::to_string(p.state()).unwrap();
+    let mut p = Planner::restore(lib.clone(), cfg, serde_json::from_str(&json).unwrap()).unwrap();
+    let d = step(&mut p, &met);
+    assert!(d.candidate.is_none() && d.reason.contains("2 decisions in a row"), "{d:?}");
+    // A checkpoint written before the count existed still reads (no slot has met it yet).
+    let mut old: serde_json::Value = serde_json::to_value(p.state()).unwrap();
+    old.as_object_mut().unwrap().remove("target_met");
+    let state: adaptive::PlannerState = serde_json::from_value(old).unwrap();
+    assert!(state.target_met.is_empty());
 }
