@@ -37,6 +37,11 @@ pub struct AdaptiveConfig {
     /// A slot's first choices (until every target channel has a covariance) go by coverage:
     /// the cheapest candidate that informs an unfitted channel.
     pub bootstrap_by_cost: bool,
+    /// Before a slot closes, run the candidates that take its data beyond where the sweeps run
+    /// so far reached (load, slip, camber; `adaptive::extent`), so the model's tested range is
+    /// the procedure's. Off by default: on GS2MF it adds only BrkDrv's extreme sweeps, for 0.5–3 %
+    /// more rig time and no better model on the virtual rig (docs/adaptive-plan.md).
+    pub cover_envelope: bool,
 }
 
 impl Default for AdaptiveConfig {
@@ -52,6 +57,7 @@ impl Default for AdaptiveConfig {
             severe_slip_angle_deg: 18.0,
             severe_load_factor: 1.75,
             bootstrap_by_cost: true,
+            cover_envelope: false,
         }
     }
 }

@@ -14,6 +14,8 @@
 //!   live model snapshot ([`model::ModelSnapshot`], from an `mffit::FitResult` or `model/covariance`) through [`model::FitView`] or any other [`model::ModelView`].
 //! - [`wire`]: the model snapshot as `tyre_msgs/ModelCovariance` (`model/covariance`) and back,
 //!   for a sequencer node that plans over DDS.
+//! - [`extent`]: how far a sweep reaches into the envelope (load, slip, camber): a slot does not
+//!   close while one of its sweeps would take the data where they have not been.
 //! - [`planner`]: the choice (value per second, pressure changes grouped, severe sweeps last)
 //!   and the stop rule; its state goes into the sequencer's checkpoint.
 //!
@@ -21,6 +23,7 @@
 
 pub mod config;
 pub mod design;
+pub mod extent;
 pub mod library;
 pub mod model;
 pub mod planner;

@@ -14,6 +14,7 @@ use procedure::{PauseModel, Plan, RigLimits, RigMode, Setpoint, StepKind};
 use serde::{Deserialize, Serialize};
 
 use crate::config::AdaptiveConfig;
+use crate::extent::Extent;
 use crate::model::Target;
 
 /// Sections whose sweeps always run (name prefixes, as the procedure files name them).
@@ -67,6 +68,9 @@ pub struct Candidate {
     pub sweep: PlanStep,
     /// Planned points (setpoints spread evenly over the sweep) for the linearisation.
     pub points: Vec<Setpoint>,
+    /// How far it reaches into the envelope (its planned and check points).
+    #[serde(default)]
+    pub extent: Extent,
 }
 
 impl Candidate {
@@ -288,6 +292,9 @@ fn candidate(plan: &Plan, i: usize, id: usize, slot: usize, pause: &PauseModel, 
     let peak_sa = check.iter().chain(points.iter()).map(|p| p.slip_angle_deg.abs()).fold(0.0, f64::max);
     let peak_fz = check.iter().chain(points.iter()).map(|p| p.fz_n).fold(0.0, f64::max);
     let severe = peak_sa >= cfg.severe_slip_angle_deg - 1e-9 || peak_fz >= cfg.severe_load_factor * plan.fz0_n - 1e-6;
+    let reach: Vec<Setpoint> = check.iter().chain(points.iter()).copied().collect();
+    // A sweep has at least its planned points (k ≥ 2), so it has an extent.
+    let extent = Extent::of(&reach).unwrap_or_default();
     Candidate {
         id,
         name: st.name.clone(),
@@ -300,5 +307,6 @@ fn candidate(plan: &Plan, i: usize, id: usize, slot: usize, pause: &PauseModel, 
         pause_s: pause.pause_after_s(st),
         sweep: st.clone(),
         points,
+        extent,
     }
 }

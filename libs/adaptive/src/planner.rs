@@ -9,7 +9,9 @@
 //! ordinary candidate is worth running any more. It stops a slot when the predicted error over
 //! the slot's targets is within [`AdaptiveConfig::target_ratio`] of what every remaining
 //! candidate together would give (the full procedure's content), when nothing left lowers it by
-//! [`AdaptiveConfig::min_relative_gain`], or when the slot's rig-time budget is spent.
+//! [`AdaptiveConfig::min_relative_gain`], or when the slot's rig-time budget is spent. With
+//! [`AdaptiveConfig::cover_envelope`], before it closes, the candidates that take the slot's data
+//! beyond where they have been (load, slip, camber: [`crate::extent`]) run, cheapest first.
 
 use nalgebra::DMatrix;
 use procedure::Setpoint;
@@ -17,6 +19,7 @@ use serde::{Deserialize, Serialize};
 
 use crate::config::AdaptiveConfig;
 use crate::design;
+use crate::extent::Extent;
 use crate::library::{Candidate, Library};
 use crate::model::{ModelView, Target};
 
@@ -280,31 +283,56 @@ impl Planner {
         }
         let met = if e_now <= target { self.state.target_met.get(slot).copied().unwrap_or(0) + 1 } else { 0 };
         let needed = self.cfg.target_confirmations.max(1);
+        let confirm_note =
+            if met > 0 { format!("; target met {met} of {needed} decisions in a row") } else { String::new() };
+        // Predicted value and error after a candidate.
+        let value_of = |c: &Candidate| -> (f64, f64) {
+            let after: Vec<f64> = known
+                .iter()
+                .map(|(t, m)| match sens(c, *t) {
+                    Some(j) => 100.0 * design::mean_variance(&m.h, &design::updated(&m.cov, &j, m.sigma)).sqrt(),
+                    None => m.error_pct(),
+                })
+                .collect();
+            let value: f64 =
+                now.iter().zip(&after).map(|(a, b)| (a * a - b * b).max(0.0)).sum::<f64>() / known.len() as f64;
+            (value, rms(&after))
+        };
+        // Before the slot closes, for whatever reason: its data must reach where its sweeps reach.
+        let widen_or_close = |why: String| -> Decision {
+            match self.widening(slot, &remaining, &affordable, from, scale) {
+                Some((c, beyond)) => {
+                    let (value, e_after) = value_of(c);
+                    Decision {
+                        slot,
+                        candidate: Some(c.id),
+                        name: c.name.clone(),
+                        value,
+                        cost_s: c.cost_s(from, &limits, scale),
+                        error_pct: e_now,
+                        error_after_pct: e_after,
+                        full_error_pct: e_full,
+                        target_pct: target,
+                        reason: format!(
+                            "the data must reach where the slot's sweeps reach before it closes ({why}): {}; predicted error {e_now:.3} → {e_after:.3} % (target {target:.3} %){confirm_note}",
+                            beyond.join(", ")
+                        ),
+                    }
+                }
+                None => close(why, e_now, e_full, target),
+            }
+        };
         if met >= needed {
             let in_a_row = if needed > 1 { format!(", {met} decisions in a row") } else { String::new() };
-            return close(
-                format!(
-                    "predicted error {e_now:.3} % ≤ target {target:.3} % (full procedure: {e_full:.3} %){in_a_row}"
-                ),
-                e_now,
-                e_full,
-                target,
-            );
+            return widen_or_close(format!(
+                "predicted error {e_now:.3} % ≤ target {target:.3} % (full procedure: {e_full:.3} %){in_a_row}"
+            ));
         }
 
         let scored: Vec<(bool, bool, Scored)> = remaining
             .iter()
             .map(|c| {
-                let after: Vec<f64> = known
-                    .iter()
-                    .map(|(t, m)| match sens(c, *t) {
-                        Some(j) => 100.0 * design::mean_variance(&m.h, &design::updated(&m.cov, &j, m.sigma)).sqrt(),
-                        None => m.error_pct(),
-                    })
-                    .collect();
-                let value: f64 =
-                    now.iter().zip(&after).map(|(a, b)| (a * a - b * b).max(0.0)).sum::<f64>() / known.len() as f64;
-                let e_after = rms(&after);
+                let (value, e_after) = value_of(c);
                 let useful = e_after <= e_now * (1.0 - self.cfg.min_relative_gain);
                 let s = Scored { id: c.id, value, cost_s: c.cost_s(from, &limits, scale), error_after_pct: e_after };
                 (c.severe, useful && affordable(c), s)
@@ -333,13 +361,11 @@ impl Planner {
                             100.0 * self.cfg.min_relative_gain
                         )
                     };
-                    return close(why, e_now, e_full, target);
+                    return widen_or_close(why);
                 }
             },
         };
         let c = &self.lib.candidates[pick.id];
-        let confirm_note =
-            if met > 0 { format!("; target met {met} of {needed} decisions in a row") } else { String::new() };
         let pressure_note = if (c.pressure_bar - from.pressure_bar).abs() > 1e-9 {
             format!(", pressure {} → {} bar", fmt(from.pressure_bar), fmt(c.pressure_bar))
         } else {
@@ -360,6 +386,51 @@ impl Planner {
                 pick.value, pick.cost_s, pick.error_after_pct
             ),
         }
+    }
+}
+
+impl Planner {
+    /// The affordable candidate of `slot` that takes the slot's data furthest beyond where the
+    /// candidates of its kind run so far reached (most axes, then the cheapest), with where;
+    /// `None` when none does or [`AdaptiveConfig::cover_envelope`] is off.
+    fn widening<'a>(
+        &self,
+        slot: usize,
+        remaining: &[&'a Candidate],
+        affordable: &dyn Fn(&Candidate) -> bool,
+        from: Setpoint,
+        scale: f64,
+    ) -> Option<(&'a Candidate, Vec<String>)> {
+        if !self.cfg.cover_envelope {
+            return None;
+        }
+        let mut best: Option<(&'a Candidate, Vec<String>, f64)> = None;
+        for &c in remaining.iter().filter(|c| affordable(c)) {
+            let data = self
+                .state
+                .used
+                .iter()
+                .map(|&id| &self.lib.candidates[id])
+                .filter(|u| u.slot == slot && u.kind == c.kind)
+                .map(|u| u.extent)
+                .reduce(Extent::union);
+            let beyond = match data {
+                Some(d) => c.extent.beyond(&d),
+                None => vec![format!("no {:?} sweep has run", c.kind).to_lowercase()],
+            };
+            if beyond.is_empty() {
+                continue;
+            }
+            let cost = c.cost_s(from, &self.lib.limits, scale);
+            let better = match &best {
+                None => true,
+                Some((_, b, bc)) => beyond.len() > b.len() || (beyond.len() == b.len() && cost < *bc),
+            };
+            if better {
+                best = Some((c, beyond, cost));
+            }
+        }
+        best.map(|(c, b, _)| (c, b))
     }
 }
 

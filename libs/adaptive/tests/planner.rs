@@ -328,3 +328,54 @@ fn one_low_reading_does_not_close_a_slot_two_in_a_row_do() {
     let state: adaptive::PlannerState = serde_json::from_value(old).unwrap();
     assert!(state.target_met.is_empty());
 }
+
+#[test]
+fn a_slot_closes_only_once_its_data_reach_where_its_sweeps_reach() {
+    // A target met at once (an absolute target far above any error): with the variance rule
+    // alone the lateral slot closes at the first decision. With `cover_envelope` it first runs
+    // the sweeps that take the data where none has been (the first of its kind, then those
+    // reaching further in load, slip angle and camber), then closes, every extreme covered.
+    let base = AdaptiveConfig {
+        target_error_pct: Some(1e6),
+        target_confirmations: 1,
+        cover_envelope: true,
+        ..AdaptiveConfig::default()
+    };
+    let lib = gs2mf_library(&base);
+    let view = Synth::new(0.01, 0.02);
+    let from = start(&lib, 0);
+    let off = AdaptiveConfig { cover_envelope: false, ..base };
+    assert!(Planner::new(lib.clone(), off).evaluate(0, from, &view, 1.0).candidate.is_none());
+
+    let mut p = Planner::new(lib.clone(), base);
+    let mut from = from;
+    let mut run = Vec::new();
+    loop {
+        let d = p.decide(0, from, &view, 1.0);
+        let Some(id) = d.candidate else {
+            assert!(d.reason.contains("≤ target"), "{d:?}");
+            break;
+        };
+        assert!(d.reason.contains("must reach where the slot's sweeps reach"), "{d:?}");
+        run.push(id);
+        from = lib.candidates[id].end();
+        assert!(run.len() <= 10, "the envelope rule ran {} sweeps", run.len());
+    }
+    let slot: Vec<&adaptive::Candidate> = lib.slots[0].candidates.iter().map(|&id| &lib.candidates[id]).collect();
+    let reach =
+        |cs: &[&adaptive::Candidate]| cs.iter().map(|c| c.extent).reduce(adaptive::extent::Extent::union).unwrap();
+    let all = reach(&slot);
+    let ran: Vec<&adaptive::Candidate> = run.iter().map(|&id| &lib.candidates[id]).collect();
+    let got = reach(&ran);
+    assert!(all.beyond(&got).is_empty(), "{:?}", all.beyond(&got));
+    assert!(got.fz_max_n > 1.7 * 6759.0, "highest load run {:.0} N", got.fz_max_n);
+    assert!(ran.len() < slot.len(), "{} of {}", ran.len(), slot.len());
+    // The same decisions after a checkpoint.
+    let mut q = Planner::new(lib.clone(), base);
+    let mut from = start(&lib, 0);
+    let first = q.decide(0, from, &view, 1.0).candidate.unwrap();
+    from = lib.candidates[first].end();
+    let json = serde_json::to_string(q.state()).unwrap();
+    let mut q = Planner::restore(lib.clone(), base, serde_json::from_str(&json).unwrap()).unwrap();
+    assert_eq!(q.decide(0, from, &view, 1.0).candidate, Some(run[1]));
+}
