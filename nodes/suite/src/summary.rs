@@ -359,5 +359,37 @@ pub fn summary_from_log(log: &mcaplog::LogReader, namespace: &str) -> Result<Run
     }
     b.summary.tyres_used = b.summary.tyre_changes.max(1);
     b.summary.wear_mm_measured = wear_by_specimen(&reports, &tyre_changes_at_s);
+    (b.summary.max_temp_c, b.summary.max_sweep_start_temp_c) = sweep_temperatures(&states, &thermal);
     Ok(b.summary)
+}
+
+/// Highest tread centre temperature (TRDTEMPC as the thermal gate received it) during sweeps,
+/// and at their starts, as the headless runner counts them live: each `thermal/state` is read
+/// in the phase of the newest `procedure/state` at or before it. 0 without thermal states.
+fn sweep_temperatures(
+    states: &[(u64, tyre_msgs::ProcedureState)],
+    thermal: &[(u64, tyre_msgs::ThermalState)],
+) -> (f64, f64) {
+    use tyre_msgs::ProcedureState as PS;
+    let (mut peak, mut at_start) = (0.0_f64, 0.0_f64);
+    let mut i: Option<usize> = None;
+    let mut started: Option<(String, u32)> = None;
+    for (_, th) in thermal {
+        let t = th.header.stamp.as_secs_f64();
+        while i.map_or(0, |i| i + 1) < states.len() && states[i.map_or(0, |i| i + 1)].1.header.stamp.as_secs_f64() <= t
+        {
+            i = Some(i.map_or(0, |i| i + 1));
+        }
+        let Some(st) = i.map(|i| &states[i].1) else { continue };
+        if st.phase != PS::PHASE_SWEEP || !th.trdtempc_c.is_finite() {
+            continue;
+        }
+        peak = peak.max(th.trdtempc_c);
+        let this = (st.procedure.clone(), st.sweep_index);
+        if started.as_ref() != Some(&this) {
+            at_start = at_start.max(th.trdtempc_c);
+            started = Some(this);
+        }
+    }
+    (peak, at_start)
 }

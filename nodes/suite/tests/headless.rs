@@ -84,6 +84,17 @@ fn summary_from_the_log_matches_the_live_summary() {
         assert!((a.rig_time_s - b.rig_time_s).abs() <= 0.11, "{a:?} vs {b:?}");
     }
     assert_eq!(finite(&from_log.wear_mm_measured), finite(&live.wear_mm_measured));
+    // Tread temperatures during sweeps and at their starts, from thermal/state in the sweep
+    // phase (a DDS run's summary had none before).
+    println!(
+        "peak tread temp: live {:.2} / {:.2} °C at a start, from log {:.2} / {:.2} °C",
+        live.max_temp_c, live.max_sweep_start_temp_c, from_log.max_temp_c, from_log.max_sweep_start_temp_c
+    );
+    assert!(live.max_temp_c > 40.0 && (from_log.max_temp_c - live.max_temp_c).abs() < 1.0);
+    assert!(
+        live.max_sweep_start_temp_c > 20.0
+            && (from_log.max_sweep_start_temp_c - live.max_sweep_start_temp_c).abs() < 1.0
+    );
 }
 
 /// Records when the first section whose name starts with `prefix` ends.

@@ -216,7 +216,20 @@ pub fn run(args: &AdaptiveBench) -> anyhow::Result<()> {
                     |tol: f64| curve.iter().find(|(_, _, e)| *e <= e_ref * (1.0 + tol) + 1e-12).map(|(t, _, _)| *t);
                 let (t_acc, t_acc10) = (reach(0.0), reach(0.10));
                 let e_final = curve.last().map_or(f64::NAN, |c| c.2);
-                let wear: f64 = summary.wear_mm_true.iter().copied().fold(0.0, f64::max);
+                // A log without the rig's truth (a run over DDS, summarised from its log) has the
+                // monitor's wear, measured from the rolling radius.
+                let max_of = |v: &[f64]| v.iter().copied().filter(|w| w.is_finite()).fold(0.0, f64::max);
+                let (wear, wear_source) = if summary.wear_mm_true.is_empty() {
+                    (max_of(&summary.wear_mm_measured), "measured")
+                } else {
+                    (max_of(&summary.wear_mm_true), "true")
+                };
+                if wear_source == "measured" {
+                    eprintln!(
+                        "  {tyre_label} seed {seed} {}: wear measured from radius (no truth in the log)",
+                        plan.label
+                    );
+                }
                 let show = |t: Option<f64>| t.map_or("not reached".to_owned(), |t| format!("{t:.0}"));
                 println!(
                     "{:<12} {:>4} {:<13} {:>8.0} {:>6} {:>8.3} {:>7.3} {:>10} {:>10} {:>7.1} {:>9.3}",
@@ -239,7 +252,8 @@ pub fn run(args: &AdaptiveBench) -> anyhow::Result<()> {
                     "error_pct": e_final, "error_over_gs2mf": e_final / e_ref, "gs2mf_error_pct": e_ref,
                     "rig_time_to_accuracy_s": t_acc, "rig_time_to_accuracy_10pct_s": t_acc10,
                     "peak_tread_temp_c": summary.max_temp_c, "peak_sweep_start_temp_c": summary.max_sweep_start_temp_c,
-                    "wear_mm_true": summary.wear_mm_true, "curve": curve.iter().map(|(t, c, e)| json!({"rig_time_s": t, "segments": c, "error_pct": e})).collect::<Vec<_>>(),
+                    "wear_mm_true": summary.wear_mm_true, "wear_mm_measured": summary.wear_mm_measured,
+                    "wear_mm": wear, "wear_source": wear_source, "curve": curve.iter().map(|(t, c, e)| json!({"rig_time_s": t, "segments": c, "error_pct": e})).collect::<Vec<_>>(),
                     "adaptive_decisions": summary.adaptive.len(),
                     "final_per_channel_pct": final_rows.iter().map(|r| json!({"channel": r.channel, "rms_pct_of_peak": r.rms_pct_of_peak})).collect::<Vec<_>>(),
                     "alarms": summary.alarms.iter().filter(|a| a.check == "graph_sweep_drift").map(|a| a.message.clone()).collect::<Vec<_>>(),
