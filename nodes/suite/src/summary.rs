@@ -360,7 +360,44 @@ pub fn summary_from_log(log: &mcaplog::LogReader, namespace: &str) -> Result<Run
     b.summary.tyres_used = b.summary.tyre_changes.max(1);
     b.summary.wear_mm_measured = wear_by_specimen(&reports, &tyre_changes_at_s);
     (b.summary.max_temp_c, b.summary.max_sweep_start_temp_c) = sweep_temperatures(&states, &thermal);
+    b.summary.adaptive = adaptive_decisions(&diags);
     Ok(b.summary)
+}
+
+/// The adaptive plan's decisions from their `/diagnostics` records (`sequencer: adaptive`, one
+/// per decision; `sequencer::decisions`): a DDS run's summary lists them as the headless one does.
+fn adaptive_decisions(diags: &[(u64, tyre_msgs::diagnostic_msgs::DiagnosticArray)]) -> Vec<AdaptiveChoice> {
+    let mut out: Vec<AdaptiveChoice> = Vec::new();
+    for (_, d) in diags {
+        for s in d.status.iter().filter(|s| s.name == "sequencer: adaptive") {
+            let get = |k: &str| s.values.iter().find(|kv| kv.key == k).map(|kv| kv.value.as_str());
+            let num = |k: &str| get(k).and_then(|v| v.parse::<f64>().ok()).unwrap_or(f64::NAN);
+            let sweep = get("sweep").unwrap_or("").to_owned();
+            let error_pct = num("predicted_error_pct");
+            let choice = AdaptiveChoice {
+                rig_time_s: get("rig_time_s")
+                    .and_then(|v| v.parse().ok())
+                    .unwrap_or_else(|| d.header.stamp.as_secs_f64()),
+                slot: get("slot").and_then(|v| v.parse().ok()).unwrap_or(0),
+                value: if sweep.is_empty() { 0.0 } else { num("value_pct2") },
+                cost_s: if sweep.is_empty() { 0.0 } else { num("cost_s") },
+                error_pct,
+                error_after_pct: if sweep.is_empty() { error_pct } else { num("predicted_error_after_pct") },
+                target_pct: num("target_pct"),
+                // "chose <sweep>: <reason>" or "slot <n> closed after <k> sweeps: <reason>".
+                reason: s.message.split_once(": ").map_or(s.message.clone(), |(_, r)| r.to_owned()),
+                sweep,
+            };
+            // A recorder that saw a record twice (a repeated publication) lists it once.
+            if !out
+                .iter()
+                .any(|c| c.rig_time_s == choice.rig_time_s && c.slot == choice.slot && c.sweep == choice.sweep)
+            {
+                out.push(choice);
+            }
+        }
+    }
+    out
 }
 
 /// Highest tread centre temperature (TRDTEMPC as the thermal gate received it) during sweeps,

@@ -89,7 +89,7 @@ impl MessageSink for Capture {
     }
 }
 
-fn run(dir: &Path) -> (RunSummary, Capture, Vec<String>) {
+fn headless(dir: &Path) -> (Headless, RunSpec) {
     let file = dir.join("mini_adaptive.toml");
     std::fs::write(&file, MINI).unwrap();
     let mut spec =
@@ -97,9 +97,14 @@ fn run(dir: &Path) -> (RunSummary, Capture, Vec<String>) {
     spec.procedure_file = file;
     spec.seed = 1;
     let cfg = sequencer::SequencerConfig { plan: sequencer::PlanKind::Adaptive, ..Default::default() };
-    let mut h = Headless::new(&spec, thermal::ThermalConfig::default(), cfg)
+    let h = Headless::new(&spec, thermal::ThermalConfig::default(), cfg)
         .expect("adaptive suite builds")
         .with_live_fit(livefit::LiveFitConfig::default());
+    (h, spec)
+}
+
+fn run(dir: &Path) -> (RunSummary, Capture, Vec<String>) {
+    let (mut h, _) = headless(dir);
     // The fixed plan holds no force & moment sweep: those are the candidates.
     assert!(!h.plan().sections.is_empty());
     let fm = h.plan().sections.iter().position(|s| s.name.starts_with("force_moment")).unwrap();
@@ -151,4 +156,29 @@ fn adaptive_plan_chooses_runs_logs_and_repeats_its_decisions() {
     let names = |s: &RunSummary| s.adaptive.iter().map(|c| c.sweep.clone()).collect::<Vec<_>>();
     assert_eq!(names(&a), names(&b));
     assert_eq!(a.total_rig_time_s, b.total_rig_time_s);
+}
+
+/// The summary of a recorded adaptive run (what a DDS run's summary is built from) lists the
+/// same decisions as the live one, from their `/diagnostics` records.
+#[test]
+fn the_summary_of_an_adaptive_log_lists_its_decisions() {
+    let dir = tempfile::tempdir().unwrap();
+    let (mut h, spec) = headless(dir.path());
+    let path = dir.path().join("adaptive.mcap");
+    let mut sink = suite::McapSink::create(&path, "/rig", &h.metadata(&spec)).expect("log");
+    let live = h.run(&mut sink, &mut |_, _| {}).expect("run");
+    sink.finish().expect("finish");
+    let log = mcaplog::LogReader::open(&path).expect("read back");
+    let from_log = suite::summary_from_log(&log, "/rig").expect("summary");
+    assert!(!live.adaptive.is_empty());
+    assert_eq!(from_log.adaptive.len(), live.adaptive.len(), "{:?}", from_log.adaptive);
+    let close = |a: f64, b: f64, tol: f64| (a.is_nan() && b.is_nan()) || (a - b).abs() <= tol * b.abs().max(1.0);
+    for (l, d) in from_log.adaptive.iter().zip(&live.adaptive) {
+        assert_eq!((l.slot, &l.sweep, &l.reason), (d.slot, &d.sweep, &d.reason));
+        assert!(close(l.rig_time_s, d.rig_time_s, 1e-3), "{l:?} vs {d:?}");
+        // The record carries 4-6 decimals.
+        assert!(close(l.value, d.value, 1e-5) && close(l.cost_s, d.cost_s, 1e-2), "{l:?} vs {d:?}");
+        assert!(close(l.error_pct, d.error_pct, 1e-4) && close(l.error_after_pct, d.error_after_pct, 1e-4));
+        assert!(close(l.target_pct, d.target_pct, 1e-4), "{l:?} vs {d:?}");
+    }
 }
