@@ -288,13 +288,12 @@ fn candidate(plan: &Plan, i: usize, id: usize, slot: usize, pause: &PauseModel, 
     let d = st.duration_s;
     let k = cfg.points_per_sweep.max(2);
     let points: Vec<Setpoint> = (0..k).map(|j| st.trajectory.at(d * (j as f64 + 0.5) / k as f64)).collect();
-    let check = st.trajectory.check_points();
-    let peak_sa = check.iter().chain(points.iter()).map(|p| p.slip_angle_deg.abs()).fold(0.0, f64::max);
-    let peak_fz = check.iter().chain(points.iter()).map(|p| p.fz_n).fold(0.0, f64::max);
-    let severe = peak_sa >= cfg.severe_slip_angle_deg - 1e-9 || peak_fz >= cfg.severe_load_factor * plan.fz0_n - 1e-6;
-    let reach: Vec<Setpoint> = check.iter().chain(points.iter()).copied().collect();
+    let mut reach = st.trajectory.check_points();
+    reach.extend_from_slice(&points);
     // A sweep has at least its planned points (k ≥ 2), so it has an extent.
     let extent = Extent::of(&reach).unwrap_or_default();
+    let severe = extent.slip_angle_abs_max_deg >= cfg.severe_slip_angle_deg - 1e-9
+        || extent.fz_max_n >= cfg.severe_load_factor * plan.fz0_n - 1e-6;
     Candidate {
         id,
         name: st.name.clone(),

@@ -409,15 +409,15 @@ fn sweep_temperatures(
 ) -> (f64, f64) {
     use tyre_msgs::ProcedureState as PS;
     let (mut peak, mut at_start) = (0.0_f64, 0.0_f64);
-    let mut i: Option<usize> = None;
+    // The number of states at or before the thermal state in hand.
+    let mut seen = 0;
     let mut started: Option<(String, u32)> = None;
     for (_, th) in thermal {
         let t = th.header.stamp.as_secs_f64();
-        while i.map_or(0, |i| i + 1) < states.len() && states[i.map_or(0, |i| i + 1)].1.header.stamp.as_secs_f64() <= t
-        {
-            i = Some(i.map_or(0, |i| i + 1));
+        while seen < states.len() && states[seen].1.header.stamp.as_secs_f64() <= t {
+            seen += 1;
         }
-        let Some(st) = i.map(|i| &states[i].1) else { continue };
+        let Some((_, st)) = seen.checked_sub(1).map(|i| &states[i]) else { continue };
         if st.phase != PS::PHASE_SWEEP || !th.trdtempc_c.is_finite() {
             continue;
         }
