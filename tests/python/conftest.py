@@ -53,3 +53,13 @@ def wait_for(predicate, timeout: float, what: str, interval: float = 0.05):
             return value
         time.sleep(interval)
     raise AssertionError(f"timed out after {timeout} s waiting for {what}")
+
+
+def taken(reader, n: int) -> list:
+    """The samples with data of `reader.take(N=n)`. cyclonedds also hands out an `InvalidSample`
+    when an instance's state changes (its writer left or unregistered it): it carries no fields,
+    and reading one as a message fails (seen once in CI: `'InvalidSample' object has no attribute
+    'clock'`)."""
+    from cyclonedds.internal import InvalidSample
+
+    return [s for s in reader.take(N=n) if not isinstance(s, InvalidSample)]

@@ -22,7 +22,7 @@ from cyclonedds.util import duration
 from mcap.reader import make_reader
 from mcap_ros2.decoder import DecoderFactory
 
-from conftest import stop, wait_for
+from conftest import stop, taken, wait_for
 from pattern import expected, plain, stamp_sec
 from tyre_msgs_idl import types
 
@@ -69,7 +69,7 @@ topics = ["procedure/command"]
         got = {}
 
         def collect():
-            for s in reader.take(N=100):
+            for s in taken(reader, 100):
                 got[stamp_sec(s)] = s
             return len(got) >= COUNT
 

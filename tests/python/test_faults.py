@@ -39,7 +39,7 @@ from cyclonedds.util import duration
 from mcap.reader import make_reader
 from mcap_ros2.decoder import DecoderFactory
 
-from conftest import REPO, stop, wait_for
+from conftest import REPO, stop, taken, wait_for
 from tyre_msgs_idl import types
 
 PHASE_SWEEP, PHASE_THERMAL_PAUSE, PHASE_PAUSED = 1, 2, 5
@@ -146,10 +146,10 @@ class ControlRoom:
 
     def poll(self) -> None:
         now = time.monotonic()
-        for d in self.diag_reader.take(N=1000):
+        for d in taken(self.diag_reader, 1000):
             self.diags.extend((now, st) for st in d.status)
-        self.states.extend((now, s) for s in self.state_reader.take(N=1000))
-        self.setpoints.extend((now, s) for s in self.setpoint_reader.take(N=10000))
+        self.states.extend((now, s) for s in taken(self.state_reader, 1000))
+        self.setpoints.extend((now, s) for s in taken(self.setpoint_reader, 10000))
 
     def wait_diag(self, name: str, after: float, timeout: float, level: int | None = None, text: str = ""):
         """The first status named `name` (and containing `text`) that arrived after `after`."""

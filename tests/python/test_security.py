@@ -35,7 +35,7 @@ from cyclonedds.util import duration
 from mcap.reader import make_reader
 
 import cyclone_c_peer
-from conftest import REPO, stop
+from conftest import REPO, stop, taken
 from tyre_msgs_idl import types
 
 SUITE_ENCLAVES = ["/rig/recorder", "/rig/thermal", "/rig/sequencer", "/rig/quality", "/rig/virtual_rig"]
@@ -122,7 +122,7 @@ class Stranger:
                 self.commands.write(types["ProcedureCommand"](command=types["ProcedureCommand"].ABORT,
                                                               operator_name="stranger"))
                 self.aborts += 1
-            self.read += len(self.samples.take(N=1000))
+            self.read += len(taken(self.samples, 1000))
             self.matched_writers = max(self.matched_writers, len(self.samples.get_matched_publications()))
             self.matched_readers = max(self.matched_readers, len(self.commands.get_matched_subscriptions()))
             time.sleep(0.2)

@@ -24,7 +24,7 @@ from cyclonedds.util import duration
 from mcap.reader import make_reader
 from mcap_ros2.decoder import DecoderFactory
 
-from conftest import REPO, wait_for
+from conftest import REPO, taken, wait_for
 from tyre_msgs_idl import types
 
 PHASE_COMPLETE = 8
@@ -63,8 +63,8 @@ def test_staticlong_over_dds_with_a_cyclonedds_control_room(tyrerig, domain_id, 
     states, reports = [], []
 
     def watch():
-        states.extend(states_reader.take(N=1000))
-        reports.extend(reports_reader.take(N=100))
+        states.extend(taken(states_reader, 1000))
+        reports.extend(taken(reports_reader, 100))
         return any(s.phase == PHASE_COMPLETE for s in states)
 
     try:
