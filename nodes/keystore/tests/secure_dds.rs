@@ -152,6 +152,13 @@ async fn only_operators_of_the_keystore_reach_the_sequencer() -> anyhow::Result<
     let mut stream = Box::pin(commands.async_stream());
     let mut controls_at = None;
     let start = tokio::time::Instant::now();
+    // RustDDS 0.15.1 sometimes never completes one pair's handshake: the lower-GUID side sends
+    // its request and ten resends, the other side never sees them, and both stay
+    // "Authenticating" for good (about 1 start in 12 here; docs/security.md). That is a
+    // liveness fault of the library, not an admission decision, so the control gets one fresh
+    // participant (a new GUID, a new handshake) if it is unheard after 15 s. Who may *not* get
+    // through is checked the same either way.
+    let mut control_restarted = false;
     // The lax monitor's refusal comes after its own handshake, which takes longer on a loaded
     // machine: keep going (up to 40 s) until a peer has logged it, too.
     let refused = || {
@@ -160,9 +167,15 @@ async fn only_operators_of_the_keystore_reach_the_sequencer() -> anyhow::Result<
             .any(|l| l.contains("to publish to topic rt/rig/procedure/command"))
     };
     while controls_at.is_none_or(|t: tokio::time::Instant| t.elapsed() < Duration::from_secs(3)) || !refused() {
-        if start.elapsed() > Duration::from_secs(40) {
+        if start.elapsed() > Duration::from_secs(if control_restarted { 55 } else { 40 }) {
             assert!(controls_at.is_some(), "the operators were never heard: {heard:?}");
             break;
+        }
+        if controls_at.is_none() && !control_restarted && start.elapsed() > Duration::from_secs(15) {
+            eprintln!("the operator was unheard after 15 s: starting it again as a fresh participant");
+            control_restarted = true;
+            nodes[0].1 = RosNode::new("operator", &config(Some(ours.root())))?;
+            senders[0].1 = nodes[0].1.publisher::<ProcedureCommand>(SuiteTopic::ProcedureCommand)?;
         }
         for (who, p) in &senders {
             // Writers that matched nobody accept the write and send nothing; nothing to check.
