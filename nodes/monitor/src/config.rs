@@ -92,7 +92,10 @@ pub struct MonitorConfig {
     /// …and needs at least this long of data [s] (chosen: 1 s = 100 samples averaged below the
     /// 0.1 mm resolution).
     pub wear_hold_min_s: f64,
-    /// Holds match (same load case) within this load [N] (chosen: 200 N)…
+    /// Holds match (same load case) within this load [N]. Chosen: 100 N. A hold's mean load
+    /// sits within a few newtons of its setpoint, neighbouring setpoints can be under 100 N apart
+    /// (1.6·Fz0 and 9,000 N in GS2MF's BrkDrv), and a tyre's radius moves 2–6 mm per kN: the
+    /// residual difference is corrected along the radius–load slope (`wear`)…
     pub wear_match_load_n: f64,
     /// …pressure [Pa] (chosen: 0.1 bar)…
     pub wear_match_pressure_pa: f64,
@@ -165,7 +168,7 @@ impl Default for MonitorConfig {
             wear_forecast_pct_usable: Levels::new(65.0, 100.0),
             wear_hold_settle_s: 2.0,
             wear_hold_min_s: 1.0,
-            wear_match_load_n: 200.0,
+            wear_match_load_n: 100.0,
             wear_match_pressure_pa: 10_000.0,
             wear_match_speed_mps: 1.0,
             wear_match_camber_deg: 0.5,
