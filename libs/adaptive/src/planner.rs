@@ -133,6 +133,23 @@ impl Planner {
         &self.cfg
     }
 
+    /// Rig time [s] the open slots may still spend on sweeps not chosen yet: each open slot's
+    /// budget (`budget_fraction` × the predicted cost of all its candidates) less what its
+    /// choices cost so far. An upper bound on what the plan adds (the stop rule usually closes
+    /// a slot sooner), so a control room's remaining time is not optimistic while slots are
+    /// open.
+    pub fn open_slots_bound_s(&self) -> f64 {
+        self.lib
+            .slots
+            .iter()
+            .filter(|slot| !self.is_closed(slot.id))
+            .map(|slot| {
+                let spent = self.state.spent_s.get(slot.id).copied().unwrap_or(0.0);
+                (self.cfg.budget_fraction * slot.full_cost_s - spent).max(0.0)
+            })
+            .sum()
+    }
+
     /// True once `slot` is closed.
     pub fn is_closed(&self, slot: usize) -> bool {
         self.state.closed.contains(&slot)

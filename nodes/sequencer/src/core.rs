@@ -1324,10 +1324,16 @@ impl Sequencer {
         let pauses_left: f64 = self.pause_estimates_s.iter().skip(first_left).sum::<f64>() * scale;
         let current_pause =
             if in_pause { self.predicted_wait_s.unwrap_or(self.pause_estimates_s[c] * scale) } else { 0.0 };
+        // An adaptive plan's open slots may still add sweeps: count their budgets (an upper
+        // bound) rather than nothing, so neither figure is optimistic until they close.
+        let open_slots_s = match (&self.adaptive, &self.state) {
+            (Some(a), s) if *s != State::Complete => a.planner.open_slots_bound_s(),
+            _ => 0.0,
+        };
         let remaining = if self.state == State::Complete {
             0.0
         } else {
-            (total - done_s - in_step_s).max(0.0) + pauses_left + current_pause
+            (total - done_s - in_step_s).max(0.0) + pauses_left + current_pause + open_slots_s
         };
         let shown_i = self.display_step();
         let shown = shown_i.map(|i| &steps[i]);
@@ -1347,7 +1353,7 @@ impl Sequencer {
             sweep_index: shown.and_then(|s| s.sweep_index).unwrap_or(0),
             sweep_count: self.plan.sweep_count(),
             sweep_started_hot: self.started_hot,
-            progress: ((done_s + in_step_s) / total).clamp(0.0, 1.0),
+            progress: ((done_s + in_step_s) / (total + open_slots_s)).clamp(0.0, 1.0),
             elapsed_rig_time_s: self.elapsed_at(now_s),
             estimated_remaining_s: remaining,
             plan_reason,

@@ -240,3 +240,27 @@ fn the_procedure_state_says_why_a_chosen_sweep_runs_and_what_error_it_predicts()
     let fixed = Sequencer::new(plan, SequencerConfig::default()).unwrap();
     assert_eq!(fixed.procedure_state(0.0).plan_reason, "");
 }
+
+#[test]
+fn until_its_slots_close_the_remaining_time_counts_what_they_may_still_run() {
+    let plan = gs2mf();
+    let mut seq = Sequencer::for_config(plan, cfg()).unwrap();
+    start(&mut seq, 0.0);
+    let planner = seq.planner().unwrap();
+    let budgets_s: f64 = planner.library().slots.iter().map(|s| planner.config().budget_fraction * s.full_cost_s).sum();
+    assert!(budgets_s > 1000.0, "GS2MF's candidates take {budgets_s} s");
+    // The same fixed steps run as a fixed plan: what the state would say without the slots.
+    let mut fixed = Sequencer::new(planner.library().fixed.clone(), SequencerConfig::default()).unwrap();
+    start(&mut fixed, 0.0);
+    let (with_slots, fixed_only) = (seq.procedure_state(1.0), fixed.procedure_state(1.0));
+    let added = with_slots.estimated_remaining_s - fixed_only.estimated_remaining_s;
+    assert!((added - budgets_s).abs() < 1e-6 * budgets_s, "added {added} s, budgets {budgets_s} s");
+    assert!(with_slots.progress < fixed_only.progress || fixed_only.progress == 0.0);
+    // An upper bound: the run ends no later than the first state said.
+    let promised_s = with_slots.elapsed_rig_time_s + with_slots.estimated_remaining_s;
+    let (end_s, _) = drive(&mut seq, 0.0, usize::MAX);
+    assert!(end_s <= promised_s, "ended at {end_s:.0} s, promised by {promised_s:.0} s");
+    // Closed slots add nothing: the end state is complete, nothing remaining.
+    let last = seq.procedure_state(end_s);
+    assert_eq!((last.progress, last.estimated_remaining_s), (1.0, 0.0));
+}
