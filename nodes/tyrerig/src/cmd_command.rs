@@ -118,11 +118,20 @@ pub fn run(args: CommandArgs) -> anyhow::Result<()> {
         };
         let mut states = states.as_ref().map(|s| Box::pin(s.async_stream()));
         let mut before: Option<u8> = None;
+        // When confirming, send only once the sequencer's own state has arrived (up to the
+        // discovery deadline): that proves the sequencer and this station have matched
+        // (secured: authenticated each other), where a discovered recorder proves nothing. A
+        // START sent 3 s after a secured suite's launch was lost that way.
         let settle = tokio::time::sleep(Duration::from_millis(1500));
         tokio::pin!(settle);
+        let mut settled = false;
         loop {
+            if settled && (states.is_none() || before.is_some() || tokio::time::Instant::now() > deadline) {
+                break;
+            }
             tokio::select! {
-                _ = &mut settle => break,
+                _ = &mut settle, if !settled => settled = true,
+                _ = tokio::time::sleep(Duration::from_millis(50)), if settled => {}
                 Some(Ok((st, _))) = async { match states.as_mut() { Some(s) => s.next().await, None => None } } => {
                     before = Some(st.phase);
                 }
