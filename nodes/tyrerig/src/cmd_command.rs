@@ -148,13 +148,12 @@ pub fn run(args: CommandArgs) -> anyhow::Result<()> {
             operator_name: operator.clone(),
         };
         publisher.publish(cmd).map_err(|e| anyhow::anyhow!("{topic}: cannot send: {e:?}"))?;
+        println!("{:?} sent on {topic} by {operator:?}", args.command);
         let Some(states) = states.as_mut() else {
             // Reliable delivery (and any resend) needs the participant alive a moment longer.
             tokio::time::sleep(Duration::from_secs(1)).await;
-            println!("{:?} sent on {topic} by {operator:?}", args.command);
             return anyhow::Ok(());
         };
-        println!("{:?} sent on {topic} by {operator:?}", args.command);
         let code = args.command.code();
         let mut last = before;
         let wait = tokio::time::sleep(Duration::from_secs_f64(args.confirm_s));
