@@ -42,6 +42,18 @@ pub struct AdaptiveConfig {
     /// the procedure's. Off by default: on GS2MF it adds only BrkDrv's extreme sweeps, for 0.5–3 %
     /// more rig time and no better model on the virtual rig (docs/adaptive-plan.md).
     pub cover_envelope: bool,
+    /// Tread a sweep wears counts in its cost: the tyre is worn out sooner, and a fresh one
+    /// costs `tyre_change_s` per `usable_tread_mm`. A candidate's wear is its sliding energy
+    /// along its sweep as the live model predicts it, × this rate \[mm/MJ\]. The default,
+    /// 0.208, is the rate at which the thesis's 32-sweep FreeRolling investigation wore the
+    /// 1.4 mm it measured (§3.6.2); the monitor fits a tyre's own rate from its rolling radius
+    /// (the k of `docs/monitoring.md`, *wear*). 0 leaves wear out of the cost.
+    pub wear_mm_per_mj: f64,
+    /// Tread a specimen may lose before it is changed \[mm\] (thesis: 5.6 mm new, 1.6 mm legal
+    /// minimum).
+    pub usable_tread_mm: f64,
+    /// Rig time of a tyre change \[s\] (the thesis's 900 s).
+    pub tyre_change_s: f64,
 }
 
 impl Default for AdaptiveConfig {
@@ -58,11 +70,19 @@ impl Default for AdaptiveConfig {
             severe_load_factor: 1.75,
             bootstrap_by_cost: true,
             cover_envelope: false,
+            wear_mm_per_mj: 0.208,
+            usable_tread_mm: 4.0,
+            tyre_change_s: 900.0,
         }
     }
 }
 
 impl AdaptiveConfig {
+    /// Rig time a millimetre of tread costs \[s/mm\]: a tyre change per usable tread.
+    pub fn wear_cost_s_per_mm(&self) -> f64 {
+        self.tyre_change_s / self.usable_tread_mm
+    }
+
     /// Checks ranges; the error names the key.
     pub fn validate(&self) -> Result<(), (&'static str, String)> {
         let pos = [
@@ -71,6 +91,7 @@ impl AdaptiveConfig {
             ("held_prior_std", self.held_prior_std),
             ("severe_slip_angle_deg", self.severe_slip_angle_deg),
             ("severe_load_factor", self.severe_load_factor),
+            ("usable_tread_mm", self.usable_tread_mm),
         ];
         for (k, v) in pos {
             if !(v.is_finite() && v > 0.0) {
@@ -90,6 +111,11 @@ impl AdaptiveConfig {
         }
         if !(self.min_relative_gain.is_finite() && (0.0..1.0).contains(&self.min_relative_gain)) {
             return Err(("min_relative_gain", format!("expected 0 ≤ x < 1, got {}", self.min_relative_gain)));
+        }
+        for (k, v) in [("wear_mm_per_mj", self.wear_mm_per_mj), ("tyre_change_s", self.tyre_change_s)] {
+            if !(v.is_finite() && v >= 0.0) {
+                return Err((k, format!("expected a number ≥ 0, got {v}")));
+            }
         }
         if self.target_confirmations < 1 {
             return Err(("target_confirmations", "expected at least 1".into()));

@@ -15,7 +15,7 @@ use serde::{Deserialize, Serialize};
 
 use crate::config::AdaptiveConfig;
 use crate::extent::Extent;
-use crate::model::Target;
+use crate::model::{ModelView, Target};
 
 /// Sections whose sweeps always run (name prefixes, as the procedure files name them).
 pub const FIXED_SECTIONS: [&str; 3] = ["warmup", "heating_sweep", "graph_sweep"];
@@ -126,6 +126,18 @@ impl Candidate {
     pub fn cost_s(&self, from: Setpoint, limits: &RigLimits, pause_scale: f64) -> f64 {
         let steps: f64 = self.group(from, limits).iter().map(|s| s.duration_s).sum();
         steps + self.pause_s * pause_scale
+    }
+
+    /// Sliding energy of the sweep as `view` predicts it \[J\] (midpoint rule, steps of at most
+    /// 0.5 s); `None` without a model.
+    pub fn sliding_energy_j(&self, view: &dyn ModelView) -> Option<f64> {
+        let d = self.sweep.duration_s.max(0.0);
+        let n = (d / 0.5).ceil().max(1.0) as usize;
+        let dt = d / n as f64;
+        (0..n).try_fold(0.0, |e, j| {
+            let sp = self.sweep.trajectory.at((j as f64 + 0.5) * dt);
+            view.sliding_power_w(&sp).map(|p| e + p * dt)
+        })
     }
 
     /// Where the rig is after it and its cool-down.

@@ -115,6 +115,11 @@ pub trait ModelView {
     fn target(&self, t: Target) -> Option<&TargetModel>;
     /// Normalised sensitivities (k×n, the target's coefficient order) at planned setpoints.
     fn sensitivities(&self, t: Target, points: &[Setpoint]) -> DMatrix<f64>;
+    /// Friction power the tyre dissipates sliding at a setpoint \[W\] (what wears the tread),
+    /// as the model predicts it; `None` without a model.
+    fn sliding_power_w(&self, _sp: &Setpoint) -> Option<f64> {
+        None
+    }
 }
 
 /// No model yet (before the first update): every target unknown.
@@ -238,6 +243,18 @@ impl ModelView for FitView<'_> {
             .map(|sp| gradient(&self.model.params, t.channel(), &b.keys, &input_of(sp, r0)) / b.scale)
             .collect();
         design::rows(&rows, b.keys.len())
+    }
+
+    /// |FX|·|slip velocity x| + |FY|·|slip velocity y|, the slip velocities κ·V and tan α·V of the
+    /// contact over the road (ISO-W), with the combined-slip forces (which reduce to the pure
+    /// ones at zero slip on the other axis).
+    fn sliding_power_w(&self, sp: &Setpoint) -> Option<f64> {
+        let x = input_of(sp, self.model.r0_m);
+        let fx = Channel::Fx.eval(&self.model.params, &x);
+        let fy = Channel::Fy.eval(&self.model.params, &x);
+        let v = sp.speed_mps.abs();
+        let p = v * (fx.abs() * sp.slip_ratio.abs() + fy.abs() * x.alpha_rad.tan().abs());
+        p.is_finite().then_some(p)
     }
 }
 

@@ -4,7 +4,9 @@
 //! predicted mean-squared prediction error over the envelope grid of the targets it informs
 //! ([`crate::design`]), its cost the predicted rig time to the end of its cool-down from where
 //! the rig is (a pressure change counts when the pressure differs, so sweeps at the pressure the
-//! rig is at are cheaper: pressure changes come grouped). It runs the best value per second among
+//! rig is at are cheaper: pressure changes come grouped) plus the rig time of the tread it wears
+//! (its sliding energy as the live model predicts it, at a tyre change per usable tread:
+//! [`AdaptiveConfig::wear_mm_per_mj`]). It runs the best value per second among
 //! the ordinary candidates, and severe ones (high slip angle or load: wear, heat) only when no
 //! ordinary candidate is worth running any more. It stops a slot when the predicted error over
 //! the slot's targets is within [`AdaptiveConfig::target_ratio`] of what every remaining
@@ -35,9 +37,13 @@ pub struct Decision {
     /// Its predicted value: reduction of the mean squared predicted error, (% of peak)².
     #[serde(with = "crate::nan_as_null")]
     pub value: f64,
-    /// Its predicted cost \[s\].
+    /// Its predicted rig time to the end of its cool-down \[s\] (what the slot's budget counts).
     #[serde(with = "crate::nan_as_null")]
     pub cost_s: f64,
+    /// Tread it is predicted to wear \[mm\] (its sliding energy × `wear_mm_per_mj`); its cost
+    /// in the choice is `cost_s` plus this × `wear_cost_s_per_mm`.
+    #[serde(default)]
+    pub wear_mm: f64,
     /// Predicted error over the slot's targets before it (% of peak, RMS over targets).
     #[serde(with = "crate::nan_as_null")]
     pub error_pct: f64,
@@ -87,6 +93,9 @@ struct Scored {
     id: usize,
     value: f64,
     cost_s: f64,
+    wear_mm: f64,
+    /// `cost_s` plus the rig time of the tread it wears: what value is divided by.
+    charged_s: f64,
     error_after_pct: f64,
 }
 
@@ -211,6 +220,7 @@ impl Planner {
             name: String::new(),
             value: 0.0,
             cost_s: 0.0,
+            wear_mm: 0.0,
             error_pct: e,
             error_after_pct: e,
             full_error_pct: full,
@@ -229,6 +239,15 @@ impl Planner {
         let budget_s = self.cfg.budget_fraction * self.lib.slots[slot].full_cost_s;
         let spent = self.state.spent_s.get(slot).copied().unwrap_or(0.0);
         let affordable = |c: &Candidate| spent + c.cost_s(from, &limits, scale) <= budget_s + 1e-9;
+        // Predicted tread loss and what it costs in rig time (a tyre change per usable tread).
+        let wear_of = |c: &Candidate| -> (f64, f64) {
+            if self.cfg.wear_mm_per_mj <= 0.0 {
+                return (0.0, 0.0);
+            }
+            let mm = c.sliding_energy_j(view).map_or(0.0, |e| self.cfg.wear_mm_per_mj * e * 1e-6);
+            (mm, mm * self.cfg.wear_cost_s_per_mm())
+        };
+        let charged = |c: &Candidate| c.cost_s(from, &limits, scale) + wear_of(c).1;
         let targets = self.targets(slot);
 
         // Bootstrap: a target without a model yet (its stage not fitted) is learnt first, by
@@ -241,9 +260,7 @@ impl Planner {
             let best = boot
                 .iter()
                 .min_by(|a, b| {
-                    (a.severe, a.cost_s(from, &limits, scale))
-                        .partial_cmp(&(b.severe, b.cost_s(from, &limits, scale)))
-                        .unwrap_or(std::cmp::Ordering::Equal)
+                    (a.severe, charged(a)).partial_cmp(&(b.severe, charged(b))).unwrap_or(std::cmp::Ordering::Equal)
                 })
                 .copied()
                 .unwrap_or(boot[0]);
@@ -254,6 +271,7 @@ impl Planner {
                 name: best.name.clone(),
                 value: f64::NAN,
                 cost_s: best.cost_s(from, &limits, scale),
+                wear_mm: wear_of(best).0,
                 error_pct: f64::NAN,
                 error_after_pct: f64::NAN,
                 full_error_pct: f64::NAN,
@@ -326,6 +344,7 @@ impl Planner {
                         name: c.name.clone(),
                         value,
                         cost_s: c.cost_s(from, &limits, scale),
+                        wear_mm: wear_of(c).0,
                         error_pct: e_now,
                         error_after_pct: e_after,
                         full_error_pct: e_full,
@@ -351,7 +370,10 @@ impl Planner {
             .map(|c| {
                 let (value, e_after) = value_of(c);
                 let useful = e_after <= e_now * (1.0 - self.cfg.min_relative_gain);
-                let s = Scored { id: c.id, value, cost_s: c.cost_s(from, &limits, scale), error_after_pct: e_after };
+                let cost_s = c.cost_s(from, &limits, scale);
+                let (wear_mm, wear_s) = wear_of(c);
+                let s =
+                    Scored { id: c.id, value, cost_s, wear_mm, charged_s: cost_s + wear_s, error_after_pct: e_after };
                 (c.severe, useful && affordable(c), s)
             })
             .collect();
@@ -359,7 +381,7 @@ impl Planner {
             scored.iter().filter(|(sv, ok, _)| *sv == severe && *ok).map(|(_, _, s)| s).fold(
                 None::<&Scored>,
                 |best, s| match best {
-                    Some(b) if b.value / b.cost_s.max(1e-9) >= s.value / s.cost_s.max(1e-9) => Some(b),
+                    Some(b) if b.value / b.charged_s.max(1e-9) >= s.value / s.charged_s.max(1e-9) => Some(b),
                     _ => Some(s),
                 },
             )
@@ -383,6 +405,11 @@ impl Planner {
             },
         };
         let c = &self.lib.candidates[pick.id];
+        let wear_note = if pick.wear_mm > 0.0 {
+            format!(" + {:.0} s of tread ({:.4} mm)", pick.charged_s - pick.cost_s, pick.wear_mm)
+        } else {
+            String::new()
+        };
         let pressure_note = if (c.pressure_bar - from.pressure_bar).abs() > 1e-9 {
             format!(", pressure {} → {} bar", fmt(from.pressure_bar), fmt(c.pressure_bar))
         } else {
@@ -394,12 +421,13 @@ impl Planner {
             name: c.name.clone(),
             value: pick.value,
             cost_s: pick.cost_s,
+            wear_mm: pick.wear_mm,
             error_pct: e_now,
             error_after_pct: pick.error_after_pct,
             full_error_pct: e_full,
             target_pct: target,
             reason: format!(
-                "{tier}: {:.4} (%²) in {:.0} s{pressure_note}; predicted error {e_now:.3} → {:.3} % (target {target:.3} %){confirm_note}",
+                "{tier}: {:.4} (%²) in {:.0} s{wear_note}{pressure_note}; predicted error {e_now:.3} → {:.3} % (target {target:.3} %){confirm_note}",
                 pick.value, pick.cost_s, pick.error_after_pct
             ),
         }

@@ -379,3 +379,51 @@ fn a_slot_closes_only_once_its_data_reach_where_its_sweeps_reach() {
     let mut q = Planner::restore(lib.clone(), base, serde_json::from_str(&json).unwrap()).unwrap();
     assert_eq!(q.decide(0, from, &view, 1.0).candidate, Some(run[1]));
 }
+
+/// `Synth` whose tyre slides with a power that grows with the square of the slip angle (so wide
+/// sweeps wear far more than narrow ones).
+struct Wearing {
+    synth: Synth,
+    watts_per_deg2: f64,
+}
+
+impl ModelView for Wearing {
+    fn target(&self, t: Target) -> Option<&TargetModel> {
+        self.synth.target(t)
+    }
+    fn sensitivities(&self, t: Target, points: &[Setpoint]) -> DMatrix<f64> {
+        self.synth.sensitivities(t, points)
+    }
+    fn sliding_power_w(&self, sp: &Setpoint) -> Option<f64> {
+        Some(self.watts_per_deg2 * sp.slip_angle_deg * sp.slip_angle_deg)
+    }
+}
+
+#[test]
+fn wear_counts_in_the_cost_and_steers_the_choice_to_sweeps_that_slide_less() {
+    let cfg = AdaptiveConfig::default();
+    let lib = gs2mf_library(&cfg);
+    let from = start(&lib, 0);
+    let no_model_of_wear = Planner::new(lib.clone(), cfg).evaluate(0, from, &Synth::new(0.01, 0.02), 1.0);
+    assert_eq!(no_model_of_wear.wear_mm, 0.0);
+    let plain = no_model_of_wear.candidate.unwrap();
+
+    // A tyre that slides hard at high slip angles: the choice moves to a sweep that wears less
+    // per unit of what it teaches, and says what its tread costs.
+    let view = Wearing { synth: Synth::new(0.01, 0.02), watts_per_deg2: 2_000.0 };
+    let d = Planner::new(lib.clone(), cfg).evaluate(0, from, &view, 1.0);
+    let chosen = d.candidate.unwrap();
+    assert_ne!(chosen, plain, "{}", d.reason);
+    let energy = |id: usize| lib.candidates[id].sliding_energy_j(&view).unwrap();
+    assert!(energy(chosen) < energy(plain), "{} J against {} J", energy(chosen), energy(plain));
+    let expected_mm = cfg.wear_mm_per_mj * energy(chosen) * 1e-6;
+    assert!((d.wear_mm - expected_mm).abs() <= 1e-12 * expected_mm.max(1.0), "{} against {expected_mm}", d.wear_mm);
+    assert!(d.reason.contains("of tread"), "{}", d.reason);
+    // The rig-time cost (what the slot's budget counts) is the same as without wear.
+    assert_eq!(d.cost_s, lib.candidates[chosen].cost_s(from, &lib.limits, 1.0));
+
+    // A rate of zero leaves wear out: the same choice as a model without sliding power.
+    let off = AdaptiveConfig { wear_mm_per_mj: 0.0, ..cfg };
+    let d = Planner::new(lib.clone(), off).evaluate(0, from, &view, 1.0);
+    assert_eq!((d.candidate, d.wear_mm), (Some(plain), 0.0));
+}

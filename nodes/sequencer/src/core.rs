@@ -219,6 +219,8 @@ pub enum SequencerEvent {
         value: f64,
         /// Predicted rig time to the end of its cool-down \[s\].
         cost_s: f64,
+        /// Predicted tread it wears \[mm\] (its cost in the choice besides `cost_s`).
+        wear_mm: f64,
         /// Predicted error before it, % of peak.
         error_pct: f64,
         /// Predicted error after it, % of peak.
@@ -635,6 +637,7 @@ impl Sequencer {
                     name: d.name.clone(),
                     value: d.value,
                     cost_s: d.cost_s,
+                    wear_mm: d.wear_mm,
                     error_pct: d.error_pct,
                     error_after_pct: d.error_after_pct,
                     target_pct: d.target_pct,

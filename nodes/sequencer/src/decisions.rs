@@ -18,13 +18,24 @@ pub struct ModelRef {
 pub fn decision_status(ev: &SequencerEvent, t: f64, model: Option<ModelRef>) -> Option<DiagnosticArray> {
     let kv = |k: &str, v: String| KeyValue { key: k.into(), value: v };
     let (message, values) = match ev {
-        SequencerEvent::SweepChosen { slot, name, value, cost_s, error_pct, error_after_pct, target_pct, reason } => (
+        SequencerEvent::SweepChosen {
+            slot,
+            name,
+            value,
+            cost_s,
+            wear_mm,
+            error_pct,
+            error_after_pct,
+            target_pct,
+            reason,
+        } => (
             format!("chose {name}: {reason}"),
             vec![
                 kv("slot", slot.to_string()),
                 kv("sweep", name.clone()),
                 kv("value_pct2", format!("{value:.6}")),
                 kv("cost_s", format!("{cost_s:.1}")),
+                kv("wear_mm", format!("{wear_mm:.5}")),
                 kv("predicted_error_pct", format!("{error_pct:.4}")),
                 kv("predicted_error_after_pct", format!("{error_after_pct:.4}")),
                 kv("target_pct", format!("{target_pct:.4}")),

@@ -137,6 +137,13 @@ fn adaptive_plan_chooses_runs_logs_and_repeats_its_decisions() {
     }
     assert_eq!(cap.decisions.len(), a.adaptive.len());
     assert!(cap.decisions.iter().any(|m| m.contains("chose ")));
+    // Each choice after the first model counts the tread it wears, predicted by the live model:
+    // a sweep of a few seconds slides some kJ (µm of tread at the thesis's 0.208 mm/MJ), and the
+    // reason says what it costs.
+    for c in a.adaptive.iter().filter(|c| !c.sweep.is_empty() && c.value.is_finite()) {
+        assert!(c.wear_mm > 1e-5 && c.wear_mm < 0.2, "{c:?}");
+        assert!(c.reason.contains("of tread"), "{}", c.reason);
+    }
     // Every decision with a model was made with one that had seen every data step before it,
     // the first too (it follows the rolling-radius hold without a pause).
     let first_hold = ran.iter().position(|r| r.contains("RollingRadius")).expect("the hold ran") as u32;
@@ -178,6 +185,7 @@ fn the_summary_of_an_adaptive_log_lists_its_decisions() {
         assert!(close(l.rig_time_s, d.rig_time_s, 1e-3), "{l:?} vs {d:?}");
         // The record carries 4-6 decimals.
         assert!(close(l.value, d.value, 1e-5) && close(l.cost_s, d.cost_s, 1e-2), "{l:?} vs {d:?}");
+        assert!(close(l.wear_mm, d.wear_mm, 1e-4), "{l:?} vs {d:?}");
         assert!(close(l.error_pct, d.error_pct, 1e-4) && close(l.error_after_pct, d.error_after_pct, 1e-4));
         assert!(close(l.target_pct, d.target_pct, 1e-4), "{l:?} vs {d:?}");
     }

@@ -47,6 +47,10 @@ pub struct AdaptiveBench {
     /// as `adaptive-r<ratio>` with its own logs.
     #[arg(long)]
     pub target_ratio: Option<f64>,
+    /// The adaptive plan's `wear_mm_per_mj` (default: the sequencer's; 0 leaves wear out of
+    /// the candidates' cost); a non-default one runs as `adaptive-w<rate>` with its own logs.
+    #[arg(long)]
+    pub wear_mm_per_mj: Option<f64>,
     /// Leave out the Square Matrix (its runs and fits take the longest).
     #[arg(long)]
     pub no_square_matrix: bool,
@@ -62,10 +66,13 @@ struct Plan {
 }
 
 fn plans(args: &AdaptiveBench) -> Vec<Plan> {
-    let adaptive = match args.target_ratio {
-        Some(r) => format!("adaptive-r{r}"),
-        None => "adaptive".into(),
-    };
+    let mut adaptive = String::from("adaptive");
+    if let Some(r) = args.target_ratio {
+        adaptive += &format!("-r{r}");
+    }
+    if let Some(w) = args.wear_mm_per_mj {
+        adaptive += &format!("-w{w}");
+    }
     let mut p = vec![
         Plan { label: "gs2mf".into(), choice: ProcedureChoice::Gs2mf, adaptive: false },
         Plan { label: adaptive, choice: ProcedureChoice::Gs2mf, adaptive: true },
@@ -94,6 +101,9 @@ fn run_log(args: &AdaptiveBench, rig: &Path, seed: u64, plan: &Plan, log: &Path)
     };
     if let Some(r) = args.target_ratio {
         seq_cfg.adaptive.target_ratio = r;
+    }
+    if let Some(w) = args.wear_mm_per_mj {
+        seq_cfg.adaptive.wear_mm_per_mj = w;
     }
     seq_cfg.validate()?;
     let mut h = Headless::new(&spec, thermal::ThermalConfig::default(), seq_cfg)?;
