@@ -68,13 +68,31 @@ struct Capture {
     newest_data_sweep: Option<u32>,
     /// Per decision: the newest data sweep run before it, and the sweep its model's data reach.
     reach: Vec<(Option<u32>, Option<u32>)>,
+    /// The sweep running now (empty outside sweeps), and the rig time of the last sample.
+    sweep: String,
+    last_sample_s: Option<f64>,
+    /// Per sweep: sliding energy from the measured forces and slips \[J\], as the planner's
+    /// model predicts it (|FX|·|κ|·V + |FY|·|tan α|·V).
+    measured_sliding_j: std::collections::HashMap<String, f64>,
 }
 
 impl MessageSink for Capture {
     fn put(&mut self, _t: f64, msg: Outgoing<'_>) -> Result<(), mcaplog::LogWriteError> {
         match msg {
-            Outgoing::Procedure(st) if st.phase == tyre_msgs::ProcedureState::PHASE_SWEEP && st.section != "warmup" => {
-                self.newest_data_sweep = Some(st.sweep_index);
+            Outgoing::Procedure(st) => {
+                let sweeping = st.phase == tyre_msgs::ProcedureState::PHASE_SWEEP;
+                if sweeping && st.section != "warmup" {
+                    self.newest_data_sweep = Some(st.sweep_index);
+                }
+                self.sweep = if sweeping { st.sweep_name.clone() } else { String::new() };
+            }
+            Outgoing::Sample(x) => {
+                if let Some(t0) = self.last_sample_s.filter(|_| !self.sweep.is_empty()) {
+                    let slip_w = x.trajvelw_mps.abs()
+                        * (x.fx_n.abs() * x.longslip.abs() + x.fyw_n.abs() * x.slipangl_deg.to_radians().tan().abs());
+                    *self.measured_sliding_j.entry(self.sweep.clone()).or_default() += slip_w * (x.runtime_s - t0);
+                }
+                self.last_sample_s = Some(x.runtime_s);
             }
             Outgoing::Diagnostics(d) => {
                 for s in d.status.iter().filter(|s| s.name == "sequencer: adaptive") {
@@ -143,6 +161,10 @@ fn adaptive_plan_chooses_runs_logs_and_repeats_its_decisions() {
     for c in a.adaptive.iter().filter(|c| !c.sweep.is_empty() && c.value.is_finite()) {
         assert!(c.wear_mm > 1e-5 && c.wear_mm < 0.2, "{c:?}");
         assert!(c.reason.contains("of tread"), "{}", c.reason);
+        // The live model's sliding energy against what the rig's measured forces and slips give.
+        let measured_mm = 0.208e-6 * cap.measured_sliding_j[&c.sweep];
+        println!("{}: wear predicted {:.5} mm, from the measurements {measured_mm:.5} mm", c.sweep, c.wear_mm);
+        assert!((c.wear_mm / measured_mm - 1.0).abs() < 0.25, "{c:?}: measured {measured_mm} mm");
     }
     // Every decision with a model was made with one that had seen every data step before it,
     // the first too (it follows the rolling-radius hold without a pause).
