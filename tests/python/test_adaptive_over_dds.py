@@ -12,6 +12,7 @@ from __future__ import annotations
 
 import json
 import subprocess
+import sys
 from pathlib import Path
 
 from mcap.reader import make_reader
@@ -140,3 +141,14 @@ def test_the_sequencer_node_plans_with_the_fit_nodes_model(tyrerig, domain_id, t
     assert reasons and all(r and r != "fixed" for r in reasons), reasons
     assert "FITTYP" in dds_log.with_suffix(".tir").read_text()
     json.dumps(chosen(dds))  # the names are plain strings
+
+    # Each choice made with a model counts the tread it wears, on /diagnostics for any consumer.
+    worn = [float(v["wear_mm"]) for _, v, m in dds if m.startswith("chose") and "model_last_sweep_index" in v]
+    assert worn and all(0.0 < w < 0.2 for w in worn), worn
+
+    # The cool-down analysis script reads a real log and scores its three predictors.
+    done = subprocess.run([sys.executable, str(REPO / "scripts/cooldown-predictors.py"), str(headless_log)],
+                          capture_output=True, text=True, timeout=300)
+    assert done.returncode == 0, done.stderr[-3000:]
+    rows = [line for line in done.stdout.splitlines() if "MAE" in line]
+    assert len(rows) == 3 and all("nan" not in r for r in rows), done.stdout
