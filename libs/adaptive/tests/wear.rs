@@ -1,9 +1,9 @@
 //! Wear in the cost: a sweep's sliding energy as the live model predicts it.
 
-use adaptive::model::{ModelSnapshot, StageSnapshot};
+use adaptive::model::{ModelSnapshot, StageSnapshot, input_of};
 use adaptive::{AdaptiveConfig, FitView, ModelView};
 use mffit::stages::TEMPLATE_TIR;
-use mftyre::{MfInput, TyreParams, UseMode, evaluate};
+use mftyre::{TyreParams, UseMode, evaluate};
 use procedure::Setpoint;
 
 fn snapshot() -> ModelSnapshot {
@@ -27,19 +27,10 @@ fn at(slip_angle_deg: f64, slip_ratio: f64, fz_n: f64) -> Setpoint {
     Setpoint { fz_n, slip_angle_deg, slip_ratio, pressure_bar: 2.2, speed_mps: 16.6, ..Setpoint::default() }
 }
 
-/// The same model evaluated by `mftyre` directly (combined slip, TNO's use mode).
+/// The same model evaluated by `mftyre` directly (combined slip, TNO's use mode), not through the
+/// fitter's channels the view uses.
 fn forces(params: &TyreParams, sp: &Setpoint) -> (f64, f64) {
-    let x = MfInput {
-        fz_n: sp.fz_n,
-        kappa: sp.slip_ratio,
-        alpha_rad: sp.slip_angle_deg.to_radians(),
-        gamma_rad: 0.0,
-        phit_per_m: 0.0,
-        vx_mps: sp.speed_mps,
-        p_pa: sp.pressure_bar * 1e5,
-        omega_radps: sp.speed_mps * (1.0 + sp.slip_ratio) / 0.3135,
-    };
-    let o = evaluate(params, UseMode::M111, &x);
+    let o = evaluate(params, UseMode::M111, &input_of(sp, 0.3135));
     (o.fx_n, o.fy_n)
 }
 

@@ -162,7 +162,7 @@ fn adaptive_plan_chooses_runs_logs_and_repeats_its_decisions() {
         assert!(c.wear_mm > 1e-5 && c.wear_mm < 0.2, "{c:?}");
         assert!(c.reason.contains("of tread"), "{}", c.reason);
         // The live model's sliding energy against what the rig's measured forces and slips give.
-        let measured_mm = 0.208e-6 * cap.measured_sliding_j[&c.sweep];
+        let measured_mm = adaptive::AdaptiveConfig::default().wear_mm_per_mj * 1e-6 * cap.measured_sliding_j[&c.sweep];
         println!("{}: wear predicted {:.5} mm, from the measurements {measured_mm:.5} mm", c.sweep, c.wear_mm);
         assert!((c.wear_mm / measured_mm - 1.0).abs() < 0.25, "{c:?}: measured {measured_mm} mm");
     }
