@@ -28,3 +28,12 @@ pub const MODEL_COVARIANCE: &str = "model/covariance";
 pub const DIAGNOSTICS: &str = "/diagnostics";
 /// `rosgraph_msgs/Clock`: the virtual rig on simulated time (ROS convention).
 pub const CLOCK: &str = "/clock";
+
+/// The monitor's wear verdict on [`DIAGNOSTICS`] (status name). Besides the verdict's own
+/// key-values it carries the wear rate measured on the tyre under test, once measurable, under
+/// [`WEAR_RATE_KEY`] and [`WEAR_RATE_SD_KEY`]: the adaptive sequencer prices wear with it.
+pub const WEAR_STATUS: &str = "tyrerig monitor: wear";
+/// Tread lost per sliding energy, the monitor's fit \[mm/MJ\] (a decimal number).
+pub const WEAR_RATE_KEY: &str = "wear_rate_mm_per_mj";
+/// Its standard error \[mm/MJ\].
+pub const WEAR_RATE_SD_KEY: &str = "wear_rate_sd_mm_per_mj";

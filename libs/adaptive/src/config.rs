@@ -47,8 +47,16 @@ pub struct AdaptiveConfig {
     /// along its sweep as the live model predicts it, × this rate \[mm/MJ\]. The default,
     /// 0.208, is the rate at which the thesis's 32-sweep FreeRolling investigation wore the
     /// 1.4 mm it measured (§3.6.2); the monitor fits a tyre's own rate from its rolling radius
-    /// (the k of `docs/monitoring.md`, *wear*). 0 leaves wear out of the cost.
+    /// (the k of `docs/monitoring.md`, *wear*), and once it has, that rate is weighed against
+    /// this one (`wear_rate_log_sd`). 0 leaves wear out of the cost.
     pub wear_mm_per_mj: f64,
+    /// How far the tyre's own wear rate may be from `wear_mm_per_mj`: the 1 σ spread of the
+    /// rate's logarithm (1.0: a factor of e ≈ 2.7 either way; compounds differ by more than
+    /// that). The monitor's measured rate, with its own spread, is weighed against the
+    /// configured one in log space (inverse-variance), so a rate measured to ±10 % all but
+    /// replaces it and a rough early one moves it a little. 0 keeps the configured rate
+    /// whatever the monitor measures.
+    pub wear_rate_log_sd: f64,
     /// Tread a specimen may lose before it is changed \[mm\] (thesis: 5.6 mm new, 1.6 mm legal
     /// minimum).
     pub usable_tread_mm: f64,
@@ -71,6 +79,7 @@ impl Default for AdaptiveConfig {
             bootstrap_by_cost: true,
             cover_envelope: false,
             wear_mm_per_mj: 0.208,
+            wear_rate_log_sd: 1.0,
             usable_tread_mm: 4.0,
             tyre_change_s: 900.0,
         }
@@ -112,7 +121,11 @@ impl AdaptiveConfig {
         if !(self.min_relative_gain.is_finite() && (0.0..1.0).contains(&self.min_relative_gain)) {
             return Err(("min_relative_gain", format!("expected 0 ≤ x < 1, got {}", self.min_relative_gain)));
         }
-        for (k, v) in [("wear_mm_per_mj", self.wear_mm_per_mj), ("tyre_change_s", self.tyre_change_s)] {
+        for (k, v) in [
+            ("wear_mm_per_mj", self.wear_mm_per_mj),
+            ("wear_rate_log_sd", self.wear_rate_log_sd),
+            ("tyre_change_s", self.tyre_change_s),
+        ] {
             if !(v.is_finite() && v >= 0.0) {
                 return Err((k, format!("expected a number ≥ 0, got {v}")));
             }

@@ -32,7 +32,7 @@ pub mod wire;
 pub use config::AdaptiveConfig;
 pub use library::{Candidate, Library, Slot};
 pub use model::{FitView, ModelSnapshot, ModelView, StageSnapshot, Target, TargetModel};
-pub use planner::{Decision, Planner, PlannerState};
+pub use planner::{Decision, MeasuredWearRate, Planner, PlannerState};
 
 /// Serde for an `f64` that may be NaN ("not known"): JSON has no NaN and writes it as `null`,
 /// so `null` reads back as NaN (checkpoints and run summaries round-trip).

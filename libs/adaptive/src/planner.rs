@@ -6,7 +6,8 @@
 //! the rig is (a pressure change counts when the pressure differs, so sweeps at the pressure the
 //! rig is at are cheaper: pressure changes come grouped) plus the rig time of the tread it wears
 //! (its sliding energy as the live model predicts it, at a tyre change per usable tread:
-//! [`AdaptiveConfig::wear_mm_per_mj`]). It runs the best value per second among
+//! [`AdaptiveConfig::wear_mm_per_mj`], weighed against the rate the monitor measures on the tyre
+//! under test once it has: [`Planner::on_measured_wear_rate`]). It runs the best value per second among
 //! the ordinary candidates, and severe ones (high slip angle or load: wear, heat) only when no
 //! ordinary candidate is worth running any more. It stops a slot when the predicted error over
 //! the slot's targets is within [`AdaptiveConfig::target_ratio`] of what every remaining
@@ -44,6 +45,10 @@ pub struct Decision {
     /// in the choice is `cost_s` plus this × `wear_cost_s_per_mm`.
     #[serde(default)]
     pub wear_mm: f64,
+    /// The wear rate it was predicted with \[mm/MJ\] ([`Planner::wear_rate_mm_per_mj`]; 0 in
+    /// older checkpoints and when wear is left out of the cost).
+    #[serde(default)]
+    pub wear_rate_mm_per_mj: f64,
     /// Predicted error over the slot's targets before it (% of peak, RMS over targets).
     #[serde(with = "crate::nan_as_null")]
     pub error_pct: f64,
@@ -74,6 +79,30 @@ pub struct PlannerState {
     /// Per slot: decisions in a row at which its target was met (reset when it is not).
     #[serde(default)]
     pub target_met: Vec<u32>,
+    /// The newest wear rate measured on the tyre under test (none until the monitor has one):
+    /// kept in the checkpoint, so a resumed run prices wear as the interrupted one did.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub measured_wear: Option<MeasuredWearRate>,
+}
+
+/// A wear rate measured on the tyre under test: the monitor's fit of tread loss (from the
+/// rolling radius) against sliding energy, with its standard error.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct MeasuredWearRate {
+    /// Tread lost per sliding energy \[mm/MJ\].
+    pub mm_per_mj: f64,
+    /// Its standard error \[mm/MJ\].
+    pub sd_mm_per_mj: f64,
+}
+
+impl MeasuredWearRate {
+    /// Its spread as the standard deviation of the rate's logarithm (delta method), or `None`
+    /// when it says nothing a log-normal weighing can use: not finite, a rate ≤ 0 (wear below
+    /// what the radius resolves yet) or a spread ≤ 0.
+    fn log_sd(&self) -> Option<f64> {
+        let ok = self.mm_per_mj.is_finite() && self.sd_mm_per_mj.is_finite();
+        (ok && self.mm_per_mj > 0.0 && self.sd_mm_per_mj > 0.0).then(|| self.sd_mm_per_mj / self.mm_per_mj)
+    }
 }
 
 /// A state that does not belong to the library.
@@ -140,6 +169,35 @@ impl Planner {
     /// The settings.
     pub fn config(&self) -> &AdaptiveConfig {
         &self.cfg
+    }
+
+    /// Takes the wear rate the monitor measured on the tyre under test (the newest replaces
+    /// the one before: the monitor's fit already holds all its evidence). A measurement that
+    /// says nothing usable ([`MeasuredWearRate`]: a rate ≤ 0, no spread) is ignored and the
+    /// previous one stays. True when it was taken.
+    pub fn on_measured_wear_rate(&mut self, rate: MeasuredWearRate) -> bool {
+        if rate.log_sd().is_none() {
+            return false;
+        }
+        self.state.measured_wear = Some(rate);
+        true
+    }
+
+    /// The wear rate candidates are priced at \[mm/MJ\]: the configured `wear_mm_per_mj` and
+    /// the measured rate weighed by their inverse variances in log space (a rate is positive
+    /// and its uncertainty a factor, not an offset). Without a measurement, or with
+    /// `wear_rate_log_sd = 0`, the configured rate; 0 when wear is left out of the cost.
+    pub fn wear_rate_mm_per_mj(&self) -> f64 {
+        let prior = self.cfg.wear_mm_per_mj;
+        let prior_sd = self.cfg.wear_rate_log_sd;
+        let measured = self.state.measured_wear.and_then(|m| m.log_sd().map(|sd| (m.mm_per_mj, sd)));
+        match measured {
+            Some((rate, sd)) if prior > 0.0 && prior_sd > 0.0 => {
+                let (w_prior, w_measured) = (prior_sd.powi(-2), sd.powi(-2));
+                ((w_prior * prior.ln() + w_measured * rate.ln()) / (w_prior + w_measured)).exp()
+            }
+            _ => prior,
+        }
     }
 
     /// Rig time [s] the open slots may still spend on sweeps not chosen yet: each open slot's
@@ -214,6 +272,7 @@ impl Planner {
 
     /// What [`Planner::decide`] would decide, without deciding it.
     pub fn evaluate(&self, slot: usize, from: Setpoint, view: &dyn ModelView, pause_scale: f64) -> Decision {
+        let wear_rate = self.wear_rate_mm_per_mj();
         let close = |reason: String, e: f64, full: f64, target: f64| Decision {
             slot,
             candidate: None,
@@ -221,6 +280,7 @@ impl Planner {
             value: 0.0,
             cost_s: 0.0,
             wear_mm: 0.0,
+            wear_rate_mm_per_mj: wear_rate,
             error_pct: e,
             error_after_pct: e,
             full_error_pct: full,
@@ -241,10 +301,10 @@ impl Planner {
         let affordable = |c: &Candidate| spent + c.cost_s(from, &limits, scale) <= budget_s + 1e-9;
         // Predicted tread loss and what it costs in rig time (a tyre change per usable tread).
         let wear_of = |c: &Candidate| -> (f64, f64) {
-            if self.cfg.wear_mm_per_mj <= 0.0 {
+            if wear_rate <= 0.0 {
                 return (0.0, 0.0);
             }
-            let mm = c.sliding_energy_j(view).map_or(0.0, |e| self.cfg.wear_mm_per_mj * e * 1e-6);
+            let mm = c.sliding_energy_j(view).map_or(0.0, |e| wear_rate * e * 1e-6);
             (mm, mm * self.cfg.wear_cost_s_per_mm())
         };
         let charged = |c: &Candidate| c.cost_s(from, &limits, scale) + wear_of(c).1;
@@ -272,6 +332,7 @@ impl Planner {
                 value: f64::NAN,
                 cost_s: best.cost_s(from, &limits, scale),
                 wear_mm: wear_of(best).0,
+                wear_rate_mm_per_mj: wear_rate,
                 error_pct: f64::NAN,
                 error_after_pct: f64::NAN,
                 full_error_pct: f64::NAN,
@@ -345,6 +406,7 @@ impl Planner {
                         value,
                         cost_s: c.cost_s(from, &limits, scale),
                         wear_mm: wear_of(c).0,
+                        wear_rate_mm_per_mj: wear_rate,
                         error_pct: e_now,
                         error_after_pct: e_after,
                         full_error_pct: e_full,
@@ -406,7 +468,12 @@ impl Planner {
         };
         let c = &self.lib.candidates[pick.id];
         let wear_note = if pick.wear_mm > 0.0 {
-            format!(" + {:.0} s of tread ({:.4} mm)", pick.charged_s - pick.cost_s, pick.wear_mm)
+            let measured = if self.state.measured_wear.is_some() { ", measured" } else { "" };
+            format!(
+                " + {:.0} s of tread ({:.4} mm at {wear_rate:.3} mm/MJ{measured})",
+                pick.charged_s - pick.cost_s,
+                pick.wear_mm
+            )
         } else {
             String::new()
         };
@@ -422,6 +489,7 @@ impl Planner {
             value: pick.value,
             cost_s: pick.cost_s,
             wear_mm: pick.wear_mm,
+            wear_rate_mm_per_mj: wear_rate,
             error_pct: e_now,
             error_after_pct: pick.error_after_pct,
             full_error_pct: e_full,

@@ -4,7 +4,7 @@
 use adaptive::design;
 use adaptive::library::CandidateKind;
 use adaptive::model::{ModelView, Target, TargetModel};
-use adaptive::{AdaptiveConfig, Library, Planner};
+use adaptive::{AdaptiveConfig, Library, MeasuredWearRate, Planner};
 use nalgebra::DMatrix;
 use procedure::{PauseModel, RigLimits, RunInputs, Setpoint};
 use std::path::PathBuf;
@@ -426,4 +426,57 @@ fn wear_counts_in_the_cost_and_steers_the_choice_to_sweeps_that_slide_less() {
     let off = AdaptiveConfig { wear_mm_per_mj: 0.0, ..cfg };
     let d = Planner::new(lib.clone(), off).evaluate(0, from, &view, 1.0);
     assert_eq!((d.candidate, d.wear_mm), (Some(plain), 0.0));
+}
+
+#[test]
+fn a_measured_wear_rate_is_weighed_against_the_configured_one_in_log_space() {
+    let cfg = AdaptiveConfig::default();
+    let lib = gs2mf_library(&cfg);
+    let from = start(&lib, 0);
+    let mut p = Planner::new(lib.clone(), cfg);
+    assert_eq!(p.wear_rate_mm_per_mj(), cfg.wear_mm_per_mj, "nothing measured: the configured rate");
+
+    // A tyre wearing four times the configured rate, measured to ±5 %: its rate all but replaces
+    // the configured one (log-space weights 1/1² against 1/0.05²: 1 to 400).
+    let fast = 4.0 * cfg.wear_mm_per_mj;
+    assert!(p.on_measured_wear_rate(MeasuredWearRate { mm_per_mj: fast, sd_mm_per_mj: 0.05 * fast }));
+    let expected = (cfg.wear_mm_per_mj.ln() / 401.0 + fast.ln() * 400.0 / 401.0).exp();
+    assert!((p.wear_rate_mm_per_mj() - expected).abs() < 1e-12, "{}", p.wear_rate_mm_per_mj());
+    assert!((p.wear_rate_mm_per_mj() / fast - 1.0).abs() < 0.005);
+    // The choice prices the tread at that rate and says it was measured.
+    let view = Wearing { synth: Synth::new(0.01, 0.02), watts_per_deg2: 2_000.0 };
+    let d = p.evaluate(0, from, &view, 1.0);
+    let id = d.candidate.unwrap();
+    let mm = p.wear_rate_mm_per_mj() * lib.candidates[id].sliding_energy_j(&view).unwrap() * 1e-6;
+    assert!((d.wear_mm - mm).abs() <= 1e-12 * mm, "{} against {mm}", d.wear_mm);
+    assert_eq!(d.wear_rate_mm_per_mj, p.wear_rate_mm_per_mj());
+    assert!(d.reason.contains("mm/MJ, measured"), "{}", d.reason);
+
+    // As uncertain as the configured rate (±100 %, a log spread of 1): halfway in log space.
+    assert!(p.on_measured_wear_rate(MeasuredWearRate { mm_per_mj: fast, sd_mm_per_mj: fast }));
+    let geometric_mean = (cfg.wear_mm_per_mj * fast).sqrt();
+    assert!((p.wear_rate_mm_per_mj() - geometric_mean).abs() < 1e-12);
+
+    // What says nothing usable is ignored and the last measurement stays: a rate ≤ 0 (the radius
+    // has not resolved any wear yet), no spread, not a number.
+    for bad in [(-0.01, 0.02), (0.0, 0.02), (0.3, 0.0), (f64::NAN, 0.1), (0.3, f64::INFINITY)] {
+        assert!(!p.on_measured_wear_rate(MeasuredWearRate { mm_per_mj: bad.0, sd_mm_per_mj: bad.1 }), "{bad:?}");
+        assert!((p.wear_rate_mm_per_mj() - geometric_mean).abs() < 1e-12);
+    }
+
+    // It survives a checkpoint (the planner's state), so a resumed run prices wear the same.
+    let resumed = Planner::restore(lib.clone(), cfg, p.state().clone()).unwrap();
+    assert_eq!(resumed.wear_rate_mm_per_mj(), p.wear_rate_mm_per_mj());
+    let json = serde_json::to_string(p.state()).unwrap();
+    let back: adaptive::PlannerState = serde_json::from_str(&json).unwrap();
+    assert_eq!(back.measured_wear, p.state().measured_wear);
+
+    // `wear_rate_log_sd = 0` keeps the configured rate; `wear_mm_per_mj = 0` leaves wear out.
+    for (cfg, rate) in [
+        (AdaptiveConfig { wear_rate_log_sd: 0.0, ..cfg }, cfg.wear_mm_per_mj),
+        (AdaptiveConfig { wear_mm_per_mj: 0.0, ..cfg }, 0.0),
+    ] {
+        let q = Planner::restore(lib.clone(), cfg, p.state().clone()).unwrap();
+        assert_eq!(q.wear_rate_mm_per_mj(), rate);
+    }
 }

@@ -110,8 +110,11 @@ impl Role {
         match self {
             Role::Rig => &[T::RigSetpoint],
             Role::Thermal => &[T::RigSample, T::ProcedureState],
-            // The adaptive plan (`plan = "adaptive"`) plans on the live fit's model and covariance.
-            Role::Sequencer => &[T::RigSample, T::ThermalState, T::ProcedureCommand, T::ModelCovariance],
+            // The adaptive plan (`plan = "adaptive"`) plans on the live fit's model and covariance,
+            // and prices wear with the rate the monitor reports on `/diagnostics`.
+            Role::Sequencer => {
+                &[T::RigSample, T::ThermalState, T::ProcedureCommand, T::ModelCovariance, T::Diagnostics]
+            }
             // The quality node also follows the live fit's model (monitor::model_watch).
             Role::Quality => &[T::RigSample, T::ProcedureState, T::ModelState],
             Role::Fit => &[T::RigSample, T::ProcedureState],

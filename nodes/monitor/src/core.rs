@@ -9,6 +9,7 @@ use std::collections::{BTreeMap, VecDeque};
 use serde::{Deserialize, Serialize};
 use tyre_msgs::diagnostic_msgs::{DiagnosticArray, DiagnosticStatus, KeyValue};
 use tyre_msgs::std_msgs::Header;
+use tyre_msgs::topics;
 use tyre_msgs::{LiveChannels, ProcedureState, QualityCheck, QualityReport, RigSample, RigSetpoint, SweepSummary};
 
 use crate::config::{ConfigError, MonitorConfig, TyreInfo};
@@ -416,17 +417,27 @@ impl MonitorCore {
             status: self
                 .checks
                 .iter()
-                .map(|c| DiagnosticStatus {
-                    level: c.level,
-                    name: format!("tyrerig monitor: {}", c.check),
-                    message: c.message.clone(),
-                    hardware_id: format!("tyre LI {}", self.tyre.load_index),
-                    values: vec![
+                .map(|c| {
+                    let mut values = vec![
                         kv("value", format!("{}", c.value)),
                         kv("threshold", format!("{}", c.threshold)),
                         kv("unit", c.unit.clone()),
                         kv("rig_time_s", format!("{:.3}", c.rig_time_s)),
-                    ],
+                    ];
+                    // The measured rate, for the adaptive plan's price of wear (m/J → mm/MJ).
+                    if c.check == "wear"
+                        && let Some(fit) = self.wear.fit
+                    {
+                        values.push(kv(topics::WEAR_RATE_KEY, format!("{}", fit.rate_m_per_j * 1e9)));
+                        values.push(kv(topics::WEAR_RATE_SD_KEY, format!("{}", fit.rate_se_m_per_j * 1e9)));
+                    }
+                    DiagnosticStatus {
+                        level: c.level,
+                        name: format!("tyrerig monitor: {}", c.check),
+                        message: c.message.clone(),
+                        hardware_id: format!("tyre LI {}", self.tyre.load_index),
+                        values,
+                    }
                 })
                 .collect(),
         }

@@ -9,7 +9,7 @@
 
 use crate::config::{PlanKind, SequencerConfig};
 use adaptive::model::ModelView;
-use adaptive::{Library, Planner, PlannerState};
+use adaptive::{Library, MeasuredWearRate, Planner, PlannerState};
 use procedure::plan::PlanEnvelopeError;
 use procedure::primitives::thermal_pause_setpoint;
 use procedure::setpoint::{EnvelopeViolation, PA_PER_BAR};
@@ -221,6 +221,9 @@ pub enum SequencerEvent {
         cost_s: f64,
         /// Predicted tread it wears \[mm\] (its cost in the choice besides `cost_s`).
         wear_mm: f64,
+        /// The wear rate that prediction used \[mm/MJ\] (configured, or weighed with the
+        /// monitor's measurement: [`Sequencer::on_wear_rate`]).
+        wear_rate_mm_per_mj: f64,
         /// Predicted error before it, % of peak.
         error_pct: f64,
         /// Predicted error after it, % of peak.
@@ -564,6 +567,15 @@ impl Sequencer {
         self.adaptive.as_ref().map(|a| &a.planner)
     }
 
+    /// The wear rate the monitor measured on the tyre under test: the adaptive plan prices
+    /// the tread of the sweeps it chooses from then on with it (weighed against the configured
+    /// rate, [`Planner::wear_rate_mm_per_mj`]). The rate belongs to the tyre's construction, so
+    /// it stays over a tyre change until the monitor measures the new specimen. Ignored by a
+    /// fixed plan; true when the planner took it.
+    pub fn on_wear_rate(&mut self, rate: MeasuredWearRate) -> bool {
+        self.adaptive.as_mut().is_some_and(|a| a.planner.on_measured_wear_rate(rate))
+    }
+
     /// The slot waiting for [`Sequencer::plan_next`], if any.
     pub fn awaiting_plan(&self) -> Option<usize> {
         match &self.state {
@@ -638,6 +650,7 @@ impl Sequencer {
                     value: d.value,
                     cost_s: d.cost_s,
                     wear_mm: d.wear_mm,
+                    wear_rate_mm_per_mj: d.wear_rate_mm_per_mj,
                     error_pct: d.error_pct,
                     error_after_pct: d.error_after_pct,
                     target_pct: d.target_pct,

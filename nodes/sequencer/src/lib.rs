@@ -14,7 +14,9 @@
 //!   restart, [`core::Sequencer::resume`] continues at the interrupted sweep.
 //! - with `plan = "adaptive"`: subscribes `model/covariance` (`ModelCovariance`) → [`PlanModel`];
 //!   at a slot, once the model has seen the last sweep, [`core::Sequencer::plan_next`] decides
-//!   and each decision goes to `/diagnostics` ([`decision_status`]).
+//!   and each decision goes to `/diagnostics` ([`decision_status`]); subscribes `/diagnostics`
+//!   for the monitor's measured wear rate ([`measured_wear_rate`]) →
+//!   [`core::Sequencer::on_wear_rate`].
 
 pub mod config;
 pub mod core;
@@ -22,8 +24,10 @@ pub mod decisions;
 pub mod plan_model;
 #[cfg(feature = "dds")]
 pub mod shell;
+pub mod wear_rate;
 
 pub use config::{PlanKind, SequencerConfig};
 pub use core::{Checkpoint, CommandRejected, Sequencer, SequencerError, SequencerEvent, SequencerOutput};
 pub use decisions::{ModelRef, decision_status};
 pub use plan_model::{PlanModel, PlanModelReady, SweepsRun};
+pub use wear_rate::measured_wear_rate;

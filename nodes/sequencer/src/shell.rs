@@ -235,6 +235,12 @@ pub async fn run(mut node: RosNode, cfg: SequencerNodeConfig, shutdown: Shutdown
     let models = if adaptive { Some(node.subscription::<ModelCovariance>(SuiteTopic::ModelCovariance)?) } else { None };
     let mut models = models.as_ref().map(|m| Box::pin(m.async_stream()));
     let model_topic = node.topic_name(SuiteTopic::ModelCovariance);
+    // … and prices the tread its sweeps wear with the rate the monitor measures on the tyre,
+    // which the monitor's wear status on `/diagnostics` carries.
+    let diagnostics =
+        if adaptive { Some(node.subscription::<DiagnosticArray>(SuiteTopic::Diagnostics)?) } else { None };
+    let mut diagnostics = diagnostics.as_ref().map(|d| Box::pin(d.async_stream()));
+    let diagnostics_topic = node.topic_name(SuiteTopic::Diagnostics);
     let mut plan_model = PlanModel::default();
     let mut plan_wait_since: Option<Instant> = None;
     let mut latest_thermal: Option<ThermalState> = None;
@@ -326,6 +332,18 @@ pub async fn run(mut node: RosNode, cfg: SequencerNodeConfig, shutdown: Shutdown
                     }
                 }
                 Some(Err(e)) => loss.on_read_error(&model_topic, &e),
+                None => break,
+            },
+            item = async { diagnostics.as_mut().expect("guarded").next().await }, if diagnostics.is_some() => match item {
+                Some(Ok((msg, info))) => {
+                    loss.on_message(&diagnostics_topic, &info, None);
+                    if let Some(rate) = crate::measured_wear_rate(&msg)
+                        && seq.on_wear_rate(rate)
+                    {
+                        tracing::debug!(rate.mm_per_mj, rate.sd_mm_per_mj, "measured wear rate");
+                    }
+                }
+                Some(Err(e)) => loss.on_read_error(&diagnostics_topic, &e),
                 None => break,
             },
             item = thermal.next() => match item {

@@ -264,3 +264,24 @@ fn until_its_slots_close_the_remaining_time_counts_what_they_may_still_run() {
     let last = seq.procedure_state(end_s);
     assert_eq!((last.progress, last.estimated_remaining_s), (1.0, 0.0));
 }
+
+#[test]
+fn the_measured_wear_rate_reaches_the_planner_and_survives_a_resume() {
+    let plan = gs2mf();
+    let mut a = Sequencer::for_config(plan.clone(), cfg()).unwrap();
+    let configured = a.planner().unwrap().wear_rate_mm_per_mj();
+    start(&mut a, 0.0);
+    let (_, _) = drive(&mut a, 0.0, 2);
+    // The monitor measured a tyre wearing three times the configured rate, to ±5 %.
+    let measured = adaptive::MeasuredWearRate { mm_per_mj: 3.0 * configured, sd_mm_per_mj: 0.15 * configured };
+    assert!(a.on_wear_rate(measured));
+    let priced = a.planner().unwrap().wear_rate_mm_per_mj();
+    assert!(priced > 2.9 * configured && priced < 3.0 * configured, "{priced} mm/MJ");
+    // The checkpoint keeps it: the resumed run prices wear as the interrupted one did.
+    let cp: Checkpoint = serde_json::from_str(&serde_json::to_string(&a.checkpoint()).unwrap()).unwrap();
+    let b = Sequencer::resume_for_config(plan.clone(), cfg(), &cp).unwrap();
+    assert_eq!(b.planner().unwrap().wear_rate_mm_per_mj(), priced);
+    // A fixed plan has nothing to price: it ignores the rate.
+    let mut fixed = Sequencer::new(plan, SequencerConfig::default()).unwrap();
+    assert!(!fixed.on_wear_rate(measured));
+}

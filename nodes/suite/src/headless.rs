@@ -377,6 +377,11 @@ impl Headless {
 
             let p = self.pipeline.on_sample(&sample);
             self.pipeline_out(t, &p, sink, &mut sum)?;
+            // The wear rate the monitor measured prices the adaptive plan's wear: read from its
+            // `/diagnostics` record, as the sequencer node does over DDS.
+            if let Some(rate) = p.diagnostics.as_ref().and_then(sequencer::measured_wear_rate) {
+                self.seq.on_wear_rate(rate);
+            }
             if let Some(fit) = self.live_fit.as_mut()
                 && fit.on_sample(&sample) == livefit::Trigger::Update
             {

@@ -84,6 +84,10 @@ pub struct AdaptiveChoice {
     /// Predicted tread it wears \[mm\] (0 when closing, or in a log from before wear counted).
     #[serde(default)]
     pub wear_mm: f64,
+    /// The wear rate that prediction used \[mm/MJ\]: the configured one, or weighed with the
+    /// monitor's measurement (0 when closing, or in a log from before it was recorded).
+    #[serde(default)]
+    pub wear_rate_mm_per_mj: f64,
     /// Predicted error before and after it, and the slot's target, % of peak.
     #[serde(with = "adaptive::nan_as_null")]
     pub error_pct: f64,
@@ -224,7 +228,18 @@ impl SummaryBuilder {
                 }
             }
             E::TyreChange { .. } => self.summary.tyre_changes += 1,
-            E::SweepChosen { slot, name, value, cost_s, wear_mm, error_pct, error_after_pct, target_pct, reason } => {
+            E::SweepChosen {
+                slot,
+                name,
+                value,
+                cost_s,
+                wear_mm,
+                wear_rate_mm_per_mj,
+                error_pct,
+                error_after_pct,
+                target_pct,
+                reason,
+            } => {
                 self.summary.adaptive.push(AdaptiveChoice {
                     rig_time_s: self.summary.total_rig_time_s,
                     slot: *slot,
@@ -232,6 +247,7 @@ impl SummaryBuilder {
                     value: *value,
                     cost_s: *cost_s,
                     wear_mm: *wear_mm,
+                    wear_rate_mm_per_mj: *wear_rate_mm_per_mj,
                     error_pct: *error_pct,
                     error_after_pct: *error_after_pct,
                     target_pct: *target_pct,
@@ -386,6 +402,7 @@ fn adaptive_decisions(diags: &[(u64, tyre_msgs::diagnostic_msgs::DiagnosticArray
                 value: if sweep.is_empty() { 0.0 } else { num("value_pct2") },
                 cost_s: if sweep.is_empty() { 0.0 } else { num("cost_s") },
                 wear_mm: get("wear_mm").and_then(|v| v.parse().ok()).unwrap_or(0.0),
+                wear_rate_mm_per_mj: get("wear_rate_mm_per_mj").and_then(|v| v.parse().ok()).unwrap_or(0.0),
                 error_pct,
                 error_after_pct: if sweep.is_empty() { error_pct } else { num("predicted_error_after_pct") },
                 target_pct: num("target_pct"),

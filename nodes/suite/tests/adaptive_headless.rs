@@ -162,7 +162,7 @@ fn adaptive_plan_chooses_runs_logs_and_repeats_its_decisions() {
         assert!(c.wear_mm > 1e-5 && c.wear_mm < 0.2, "{c:?}");
         assert!(c.reason.contains("of tread"), "{}", c.reason);
         // The live model's sliding energy against what the rig's measured forces and slips give.
-        let measured_mm = adaptive::AdaptiveConfig::default().wear_mm_per_mj * 1e-6 * cap.measured_sliding_j[&c.sweep];
+        let measured_mm = c.wear_rate_mm_per_mj * 1e-6 * cap.measured_sliding_j[&c.sweep];
         println!("{}: wear predicted {:.5} mm, from the measurements {measured_mm:.5} mm", c.sweep, c.wear_mm);
         assert!((c.wear_mm / measured_mm - 1.0).abs() < 0.25, "{c:?}: measured {measured_mm} mm");
     }
@@ -211,4 +211,46 @@ fn the_summary_of_an_adaptive_log_lists_its_decisions() {
         assert!(close(l.error_pct, d.error_pct, 1e-4) && close(l.error_after_pct, d.error_after_pct, 1e-4));
         assert!(close(l.target_pct, d.target_pct, 1e-4), "{l:?} vs {d:?}");
     }
+}
+
+/// A tyre that wears four times as fast as the configured rate (the virtual rig's wear
+/// multiplier): once the monitor has measured the rate from the rolling radius, the plan prices
+/// the tread of its choices at that rate, read from the monitor's `/diagnostics` record.
+/// BrkDrv alone (its reference holds repeat load cases, so the rate is measured early).
+#[test]
+fn the_plan_prices_wear_at_the_rate_the_monitor_measures_on_the_tyre() {
+    let mut spec =
+        RunSpec::new(&Path::new(env!("CARGO_MANIFEST_DIR")).join("../../launch-config"), ProcedureChoice::BrkDrv);
+    spec.seed = 2;
+    spec.wear_multiplier = Some(4.0);
+    let cfg = sequencer::SequencerConfig { plan: sequencer::PlanKind::Adaptive, ..Default::default() };
+    let configured = cfg.adaptive.wear_mm_per_mj;
+    let mut h = Headless::new(&spec, thermal::ThermalConfig::default(), cfg)
+        .expect("adaptive suite builds")
+        .with_live_fit(livefit::LiveFitConfig::default());
+    let a = h.run(&mut Capture::default(), &mut |_, _| {}).expect("run");
+    let choices: Vec<_> = a.adaptive.iter().filter(|c| !c.sweep.is_empty()).collect();
+    for c in &choices {
+        println!("{:>7.0} s {}: {:.3} mm/MJ, {:.4} mm", c.rig_time_s, c.sweep, c.wear_rate_mm_per_mj, c.wear_mm);
+    }
+    assert!(a.completed && choices.len() >= 10, "{a:?}");
+    // Before the monitor can measure (two holds of one load case), the configured rate.
+    assert_eq!(choices[0].wear_rate_mm_per_mj, configured);
+    // The rig's own rate: its true tread loss over the sliding energy it counts is
+    // `configured` × 4 by construction; the monitor measures it from the radius.
+    let true_rate = 4.0 * configured;
+    let last = choices.last().unwrap();
+    assert!(
+        (last.wear_rate_mm_per_mj / true_rate - 1.0).abs() < 0.15,
+        "last choice priced at {} mm/MJ, the tyre wears {true_rate} mm/MJ",
+        last.wear_rate_mm_per_mj
+    );
+    assert!(last.reason.contains("mm/MJ, measured"), "{}", last.reason);
+    // Most of the run is priced at the measured rate, not the configured one.
+    let measured = choices.iter().filter(|c| c.wear_rate_mm_per_mj > 2.0 * configured).count();
+    assert!(
+        2 * measured > choices.len(),
+        "{measured} of {} choices priced above twice the configured rate",
+        choices.len()
+    );
 }
