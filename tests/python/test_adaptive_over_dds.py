@@ -145,6 +145,11 @@ def test_the_sequencer_node_plans_with_the_fit_nodes_model(tyrerig, domain_id, t
     # Each choice made with a model counts the tread it wears, on /diagnostics for any consumer.
     worn = [float(v["wear_mm"]) for _, v, m in dds if m.startswith("chose") and "model_last_sweep_index" in v]
     assert worn and all(0.0 < w < 0.2 for w in worn), worn
+    # … at the wear rate it was priced at: the configured 0.208 mm/MJ until the monitor has
+    # measured the tyre's (two holds of one load case, more than this short run has), the same
+    # over DDS as headless.
+    rates = lambda ds: [float(v["wear_rate_mm_per_mj"]) for _, v, m in ds if m.startswith("chose")]  # noqa: E731
+    assert rates(dds) == rates(headless) and all(r == 0.208 for r in rates(dds)), (rates(dds), rates(headless))
 
     # The cool-down analysis script reads a real log and scores its three predictors.
     done = subprocess.run([sys.executable, str(REPO / "scripts/cooldown-predictors.py"), str(headless_log)],
