@@ -51,6 +51,11 @@ pub struct AdaptiveBench {
     /// the candidates' cost); a non-default one runs as `adaptive-w<rate>` with its own logs.
     #[arg(long)]
     pub wear_mm_per_mj: Option<f64>,
+    /// The adaptive plan's `wear_rate_log_sd` (default: the sequencer's; 0 prices wear at the
+    /// configured rate whatever the monitor measures); a non-default one runs as
+    /// `adaptive-s<sd>` with its own logs.
+    #[arg(long)]
+    pub wear_rate_log_sd: Option<f64>,
     /// Leave out the Square Matrix (its runs and fits take the longest).
     #[arg(long)]
     pub no_square_matrix: bool,
@@ -72,6 +77,9 @@ fn plans(args: &AdaptiveBench) -> Vec<Plan> {
     }
     if let Some(w) = args.wear_mm_per_mj {
         adaptive += &format!("-w{w}");
+    }
+    if let Some(sd) = args.wear_rate_log_sd {
+        adaptive += &format!("-s{sd}");
     }
     let mut p = vec![
         Plan { label: "gs2mf".into(), choice: ProcedureChoice::Gs2mf, adaptive: false },
@@ -104,6 +112,9 @@ fn run_log(args: &AdaptiveBench, rig: &Path, seed: u64, plan: &Plan, log: &Path)
     }
     if let Some(w) = args.wear_mm_per_mj {
         seq_cfg.adaptive.wear_mm_per_mj = w;
+    }
+    if let Some(sd) = args.wear_rate_log_sd {
+        seq_cfg.adaptive.wear_rate_log_sd = sd;
     }
     seq_cfg.validate()?;
     let mut h = Headless::new(&spec, thermal::ThermalConfig::default(), seq_cfg)?;
