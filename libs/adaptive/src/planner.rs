@@ -468,7 +468,8 @@ impl Planner {
         };
         let c = &self.lib.candidates[pick.id];
         let wear_note = if pick.wear_mm > 0.0 {
-            let measured = if self.state.measured_wear.is_some() { ", measured" } else { "" };
+            let weighed = self.state.measured_wear.is_some() && self.cfg.wear_rate_log_sd > 0.0;
+            let measured = if weighed { ", measured" } else { "" };
             format!(
                 " + {:.0} s of tread ({:.4} mm at {wear_rate:.3} mm/MJ{measured})",
                 pick.charged_s - pick.cost_s,

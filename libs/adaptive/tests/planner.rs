@@ -479,4 +479,9 @@ fn a_measured_wear_rate_is_weighed_against_the_configured_one_in_log_space() {
         let q = Planner::restore(lib.clone(), cfg, p.state().clone()).unwrap();
         assert_eq!(q.wear_rate_mm_per_mj(), rate);
     }
+    // … and a choice priced at the configured rate does not claim a measured one.
+    let configured_only = AdaptiveConfig { wear_rate_log_sd: 0.0, ..cfg };
+    let q = Planner::restore(lib.clone(), configured_only, p.state().clone()).unwrap();
+    let d = q.evaluate(0, from, &view, 1.0);
+    assert!(d.reason.contains("mm/MJ)") && !d.reason.contains("measured"), "{}", d.reason);
 }
