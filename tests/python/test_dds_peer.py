@@ -53,7 +53,10 @@ kind = "test_pattern"
 [node.config]
 rate_hz = 30.0
 count = {COUNT}
-discovery_wait_s = 2.0
+# Publish only once our reader is discovered: the topic is volatile, so a sample sent before
+# the match is gone (a fixed 2 s wait lost them once on a loaded CI machine).
+wait_for_subscribers = 1
+discovery_wait_s = 1.0
 topics = ["sample"]
 
 [[node]]
@@ -73,7 +76,10 @@ topics = ["procedure/command"]
                 got[stamp_sec(s)] = s
             return len(got) >= COUNT
 
-        wait_for(collect, 30.0, f"{COUNT} RigSamples from the Rust test_pattern node")
+        try:
+            wait_for(collect, 30.0, f"{COUNT} RigSamples from the Rust test_pattern node")
+        except AssertionError as e:
+            raise AssertionError(f"{e}; got {len(got)}: {sorted(got)[:5]}…") from None
         for n in range(COUNT):
             assert got[n] == expected("tyre_msgs/msg/RigSample", n), f"RigSample {n}"
         assert got[7].fx_n == 7 + 5 / 8 and got[7].header.frame_id == "7:2:ü"
@@ -95,3 +101,45 @@ topics = ["procedure/command"]
         log = make_reader(f, validate_crcs=True, decoder_factories=[DecoderFactory()])
         received = [m for _, _, _, m in log.iter_decoded_messages(topics=["/rig/procedure/command"])]
     assert [plain(m) for m in received] == [plain(m) for m in sent]
+
+
+def test_the_test_pattern_waits_for_a_late_subscriber(tyrerig, domain_id, tmp_path: Path):
+    """With `wait_for_subscribers`, a pattern started before its only subscriber holds its first
+    sample until the subscriber is there: on a volatile topic, nothing sent earlier would arrive."""
+    RigSample = types["RigSample"]
+    launch = tmp_path / "late.toml"
+    launch.write_text(f"""
+[runtime]
+namespace = "/rig"
+domain_id = {domain_id}
+
+[[node]]
+name = "pattern"
+kind = "test_pattern"
+[node.config]
+rate_hz = 20.0
+count = 10
+wait_for_subscribers = 1
+discovery_wait_s = 1.0
+topics = ["sample"]
+""")
+    proc = subprocess.Popen([str(tyrerig), "node", "pattern", "--config", str(launch)], cwd=tmp_path)
+    try:
+        # Longer than the pattern would take to send everything if it did not wait.
+        time.sleep(3.0)
+        assert proc.poll() is None, "the pattern ended before anybody subscribed"
+        dp = DomainParticipant(domain_id)
+        reliable = Qos(Policy.Reliability.Reliable(duration(seconds=1)), Policy.History.KeepAll,
+                       Policy.Durability.Volatile)
+        reader = DataReader(dp, Topic(dp, "rt/rig/sample", RigSample), qos=reliable)
+        got = set()
+
+        def collect():
+            got.update(stamp_sec(s) for s in taken(reader, 100))
+            return len(got) >= 10
+
+        wait_for(collect, 30.0, "10 RigSamples sent after our reader joined")
+        assert sorted(got) == list(range(10)), "the first sample waited for the subscriber"
+        assert proc.wait(timeout=30) == 0
+    finally:
+        stop(proc)

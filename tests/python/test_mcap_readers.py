@@ -43,7 +43,9 @@ kind = "test_pattern"
 [node.config]
 rate_hz = 20.0
 count = {COUNT}
-discovery_wait_s = 2.0
+# The recorder starts in its own process: publish once it has subscribed to every topic.
+wait_for_subscribers = 1
+discovery_wait_s = 1.0
 
 [[node]]
 name = "recorder"

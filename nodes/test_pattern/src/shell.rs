@@ -16,9 +16,16 @@ pub struct TestPatternConfig {
     /// Stop after this many messages per topic (absent: until shut down).
     #[serde(default)]
     pub count: Option<u64>,
-    /// Wait before the first message so subscribers can discover the publishers [s].
+    /// Wait before the first message so subscribers can discover the publishers [s]. With
+    /// `wait_for_subscribers`, this wait starts once they are discovered: it covers the
+    /// writer-to-reader match that follows discovery.
     #[serde(default = "default_wait")]
     pub discovery_wait_s: f64,
+    /// Before the first message, wait until every selected topic has this many subscriptions
+    /// from other participants. A fixed wait alone loses the first samples of a volatile topic
+    /// whenever discovery is slower than the wait (a loaded CI machine: it did).
+    #[serde(default)]
+    pub wait_for_subscribers: usize,
     /// Relative or full topic names; absent = every suite topic.
     #[serde(default)]
     pub topics: Option<Vec<String>>,
@@ -88,6 +95,19 @@ pub async fn run(mut node: RosNode, cfg: TestPatternConfig, shutdown: Shutdown) 
     let mut publishers = Vec::new();
     for t in &topics {
         publishers.push((t.full_name(&ns), t.visit(Make(&mut node))?));
+    }
+    let mut last_report = tokio::time::Instant::now();
+    while let Some(short) = topics.iter().find(|t| node.discovered_subscriptions(**t) < cfg.wait_for_subscribers) {
+        if last_report.elapsed() >= Duration::from_secs(5) {
+            let found = node.discovered_subscriptions(*short);
+            let topic = short.full_name(&ns);
+            tracing::info!("waiting for {} subscribers of {topic}, {found} so far", cfg.wait_for_subscribers);
+            last_report = tokio::time::Instant::now();
+        }
+        tokio::select! {
+            _ = shutdown.wait() => return Ok(0),
+            _ = tokio::time::sleep(Duration::from_millis(50)) => {}
+        }
     }
     tokio::select! {
         _ = shutdown.wait() => return Ok(0),
