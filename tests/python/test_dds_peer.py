@@ -27,6 +27,29 @@ from pattern import expected, plain, stamp_sec
 from tyre_msgs_idl import types
 
 COUNT = 60
+RELIABLE = Qos(Policy.Reliability.Reliable(duration(seconds=1)), Policy.History.KeepAll,
+               Policy.Durability.Volatile)
+
+
+def pattern_launch(domain_id: int, rate_hz: float, count: int) -> str:
+    """A launch file's runtime and a test_pattern node publishing RigSamples. It publishes only
+    once a subscriber is discovered: the topic is volatile, so a sample sent before the match is
+    gone (a fixed 2 s wait lost them once on a loaded CI machine)."""
+    return f"""
+[runtime]
+namespace = "/rig"
+domain_id = {domain_id}
+
+[[node]]
+name = "pattern"
+kind = "test_pattern"
+[node.config]
+rate_hz = {rate_hz}
+count = {count}
+wait_for_subscribers = 1
+discovery_wait_s = 1.0
+topics = ["sample"]
+"""
 
 
 def test_cyclonedds_reads_rig_samples_and_sends_commands(tyrerig, domain_id, tmp_path: Path):
@@ -36,29 +59,11 @@ def test_cyclonedds_reads_rig_samples_and_sends_commands(tyrerig, domain_id, tmp
     Time = types["builtin_interfaces/msg/Time"]
 
     dp = DomainParticipant(domain_id)
-    reliable = Qos(Policy.Reliability.Reliable(duration(seconds=1)), Policy.History.KeepAll,
-                   Policy.Durability.Volatile)
-    reader = DataReader(dp, Topic(dp, "rt/rig/sample", RigSample), qos=reliable)
-    writer = DataWriter(dp, Topic(dp, "rt/rig/procedure/command", ProcedureCommand), qos=reliable)
+    reader = DataReader(dp, Topic(dp, "rt/rig/sample", RigSample), qos=RELIABLE)
+    writer = DataWriter(dp, Topic(dp, "rt/rig/procedure/command", ProcedureCommand), qos=RELIABLE)
 
     launch = tmp_path / "peer.toml"
-    launch.write_text(f"""
-[runtime]
-namespace = "/rig"
-domain_id = {domain_id}
-
-[[node]]
-name = "pattern"
-kind = "test_pattern"
-[node.config]
-rate_hz = 30.0
-count = {COUNT}
-# Publish only once our reader is discovered: the topic is volatile, so a sample sent before
-# the match is gone (a fixed 2 s wait lost them once on a loaded CI machine).
-wait_for_subscribers = 1
-discovery_wait_s = 1.0
-topics = ["sample"]
-
+    launch.write_text(pattern_launch(domain_id, 30.0, COUNT) + """
 [[node]]
 name = "recorder"
 kind = "recorder"
@@ -108,30 +113,14 @@ def test_the_test_pattern_waits_for_a_late_subscriber(tyrerig, domain_id, tmp_pa
     sample until the subscriber is there: on a volatile topic, nothing sent earlier would arrive."""
     RigSample = types["RigSample"]
     launch = tmp_path / "late.toml"
-    launch.write_text(f"""
-[runtime]
-namespace = "/rig"
-domain_id = {domain_id}
-
-[[node]]
-name = "pattern"
-kind = "test_pattern"
-[node.config]
-rate_hz = 20.0
-count = 10
-wait_for_subscribers = 1
-discovery_wait_s = 1.0
-topics = ["sample"]
-""")
+    launch.write_text(pattern_launch(domain_id, 20.0, 10))
     proc = subprocess.Popen([str(tyrerig), "node", "pattern", "--config", str(launch)], cwd=tmp_path)
     try:
         # Longer than the pattern would take to send everything if it did not wait.
         time.sleep(3.0)
         assert proc.poll() is None, "the pattern ended before anybody subscribed"
         dp = DomainParticipant(domain_id)
-        reliable = Qos(Policy.Reliability.Reliable(duration(seconds=1)), Policy.History.KeepAll,
-                       Policy.Durability.Volatile)
-        reader = DataReader(dp, Topic(dp, "rt/rig/sample", RigSample), qos=reliable)
+        reader = DataReader(dp, Topic(dp, "rt/rig/sample", RigSample), qos=RELIABLE)
         got = set()
 
         def collect():

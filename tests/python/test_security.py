@@ -230,8 +230,8 @@ topics = ["procedure/command"]
     suite = subprocess.Popen([str(tyrerig), "launch", str(launch)], cwd=tmp_path,
                              stderr=open(tmp_path / "launch.log", "w"))
 
-    def command(keystore: Path, station: str, operator: str, timeout_s: float) -> subprocess.Popen:
-        log = tmp_path / f"{operator}.log"
+    def command(keystore: Path, station: str, operator: str, timeout_s: float, log_name: str = "") -> subprocess.Popen:
+        log = tmp_path / f"{log_name or operator}.log"
         # Without a backtrace the station's error is its one-line reason, which a failed
         # assertion below prints whole.
         env = {k: v for k, v in os.environ.items() if k not in ("RUST_BACKTRACE", "RUST_LIB_BACKTRACE")}
@@ -242,9 +242,9 @@ topics = ["procedure/command"]
              "--confirm-s", "0"],
             stdout=open(log.with_suffix(".out"), "w"), stderr=open(log, "w"), env=env)
 
-    def result(operator: str, p: subprocess.Popen) -> tuple:
+    def result(log_name: str, p: subprocess.Popen) -> tuple:
         rc = p.wait(timeout=90)
-        log = tmp_path / f"{operator}.log"
+        log = tmp_path / f"{log_name}.log"
         return rc, log.with_suffix(".out").read_text(), log.read_text()
 
     # A plain stranger sends commands too.
@@ -262,6 +262,14 @@ topics = ["procedure/command"]
             time.sleep(0.1)
         results = {k: result(k if k != "other keystore" else "stranger-with-a-certificate", p)
                    for k, p in stations.items()}
+        rc, _, err = results["operator"]
+        if rc != 0 and "no subscriber" in err:
+            # RustDDS 0.15.1 now and then stalls one secured handshake for good; the remedy
+            # docs/security.md gives the operator is to send again, which is a new participant
+            # and a new handshake. Seen once here, with the machine loaded by a second test run.
+            print("operator station unheard; sending again as docs/security.md says:", err[-500:])
+            results["operator"] = result("operator-again", command(ours, "/rig/operator_1", "operator", 60,
+                                                                   log_name="operator-again"))
     finally:
         stop(suite)
 

@@ -9,6 +9,7 @@
 //! - [`replay`]: republishes a log onto the same topics with its original timing, scaled.
 
 pub mod config;
+pub mod forward;
 pub mod replay;
 pub mod shell;
 

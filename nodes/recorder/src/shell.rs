@@ -12,7 +12,7 @@
 //! rig's rate; beyond its ceiling the loss is counted, never hidden.
 
 use crate::config::{OnExisting, RecorderConfig, RecorderConfigError};
-use futures::StreamExt;
+use crate::forward::{DRAIN_LIMIT, forward};
 use mcaplog::{LogWriteError, McapLog, McapLogOptions, codec};
 use node_runtime::{LossWatch, RosNode, RuntimeError, Shutdown, SuiteTopic, topics::TopicVisitor};
 use ros2_client::{MessageInfo, ros2::ReadError};
@@ -333,33 +333,32 @@ impl TopicVisitor for Subscribe<'_> {
         let (tx, shutdown) = (self.tx, self.shutdown);
         let type_name = M::ros_type_name();
         Ok(tokio::spawn(async move {
-            let mut stream = Box::pin(sub.async_stream());
-            loop {
-                let item = tokio::select! {
-                    _ = shutdown.wait() => break,
-                    item = stream.next() => item,
-                };
-                let rec = match item {
-                    Some(Ok((msg, info))) => {
-                        let log_time_ns = now_ns();
-                        let message_seq = (&msg as &dyn std::any::Any).downcast_ref::<RigSample>().map(|s| s.seq);
-                        match codec::encode(&msg, &type_name) {
-                            Ok(data) => {
-                                let publish_time_ns = codec::leading_stamp(&data).map_or(0, |t| t.as_nanos());
-                                Received::Message { topic, log_time_ns, publish_time_ns, data, info, message_seq }
-                            }
-                            Err(e) => {
-                                tracing::error!("{topic:?}: {e}");
-                                continue;
-                            }
+            let convert = |item: Result<(M, MessageInfo), ReadError>| match item {
+                Ok((msg, info)) => {
+                    let log_time_ns = now_ns();
+                    let message_seq = (&msg as &dyn std::any::Any).downcast_ref::<RigSample>().map(|s| s.seq);
+                    match codec::encode(&msg, &type_name) {
+                        Ok(data) => {
+                            let publish_time_ns = codec::leading_stamp(&data).map_or(0, |t| t.as_nanos());
+                            Some(Received::Message { topic, log_time_ns, publish_time_ns, data, info, message_seq })
+                        }
+                        Err(e) => {
+                            tracing::error!("{topic:?}: {e}");
+                            None
                         }
                     }
-                    Some(Err(error)) => Received::Refused { topic, error },
-                    None => break,
-                };
-                if tx.send(rec).await.is_err() {
-                    break;
                 }
+                Err(error) => Some(Received::Refused { topic, error }),
+            };
+            let done = forward(sub.async_stream(), &shutdown, &tx, convert).await;
+            if done.drain_cut_short {
+                tracing::warn!(
+                    drained = done.drained,
+                    "{topic:?}: still arriving {} s after the stop; the log ends here",
+                    DRAIN_LIMIT.as_secs_f64()
+                );
+            } else if done.drained > 0 {
+                tracing::debug!(drained = done.drained, "{topic:?}: taken from the reader after the stop");
             }
         }))
     }
