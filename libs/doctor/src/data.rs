@@ -103,6 +103,9 @@ pub struct Series {
     pub sweep: Vec<usize>,
     /// Start of a new tyre (first sample of a log or after a tyre change): integrals reset.
     pub new_tyre: Vec<bool>,
+    /// Ordinal of the tyre (specimen) over the test: 0 for the first log's tyre, one more at
+    /// every new tyre.
+    pub tyre: Vec<usize>,
     /// SLIPANGL [deg].
     pub alpha_deg: Vec<f64>,
     /// LONGSLIP [-].
@@ -345,6 +348,15 @@ impl Dataset {
                 let py = s.fy_n[i] * v * sa;
                 let px = s.fx_n[i] * s.kappa[i] * v * ca;
                 (px * px + py * py).sqrt()
+            })
+            .collect();
+        let mut tyre = 0usize;
+        s.tyre = (0..n)
+            .map(|i| {
+                if s.new_tyre[i] && i > 0 {
+                    tyre += 1;
+                }
+                tyre
             })
             .collect();
         let mut e = 0.0;

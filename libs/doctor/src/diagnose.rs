@@ -1,13 +1,15 @@
-//! The doctor's loop: simulate, find, name (greedy, cross-validated), add, show.
+//! The doctor's loop: simulate, find, name (greedy, cross-validated, calibrated), add, show.
 
 use crate::DoctorError;
 use crate::data::Dataset;
-use crate::effects::{CH_FY, CH_RL, CHANNELS, Effect, EffectParams, Evaluator, param_specs, untestable_reason};
+use crate::effects::{CH_FY, CH_RL, CHANNELS, Effect, EffectParams, Evaluator, Family, param_specs, untestable_reason};
 use crate::fit::{
     FitOptions, FitSpec, chi2, count_valid, cross_validate, cross_validate_corrected, fit_effects, folds, measured,
     noise_floor,
 };
 use crate::form::{self, Bandwidths};
+use crate::linfit;
+use crate::state::{self, Choice, Coverage, Term};
 use mftyre::TyreParams;
 use serde::Serialize;
 
@@ -39,10 +41,20 @@ pub struct DoctorConfig {
     /// a channel the base model was neither fitted for nor given for would show the base's own
     /// gap, and the doctor would "explain" it with some effect.
     pub not_diagnosed: Vec<(usize, String)>,
-    /// Score state effects (thermal, wear, break-in, transient, speed) against the present model
-    /// plus the cross-fitted form error ([`crate::form`]): on for a base fitted to the same
-    /// logs, whose remaining misfit is mostly the MF form's own.
+    /// Score state effects against the present model plus the cross-fitted form error
+    /// ([`crate::form`]): on for a base fitted to the same logs, whose remaining misfit is
+    /// mostly the MF form's own.
     pub form_correction: bool,
+    /// Family-wise false-naming rate per round: a candidate is named only when the block
+    /// bootstrap over sweeps puts its held-out gain above zero with this error rate, shared
+    /// (Bonferroni) among the round's testable candidates.
+    pub false_naming_rate: f64,
+    /// Bootstrap resamples of the sweeps.
+    pub bootstrap_resamples: usize,
+    /// An addition may make no channel's held-out χ² worse than this share (plus three standard
+    /// deviations of a χ² of the channel's residual count: the folds' own scatter); beyond it
+    /// the addition harms that channel and is not made.
+    pub harm_tolerance: f64,
 }
 
 impl Default for DoctorConfig {
@@ -59,6 +71,9 @@ impl Default for DoctorConfig {
             min_region_cut: 0.1,
             not_diagnosed: Vec::new(),
             form_correction: false,
+            false_naming_rate: 0.05,
+            bootstrap_resamples: 2000,
+            harm_tolerance: 0.01,
         }
     }
 }
@@ -68,11 +83,13 @@ impl Default for DoctorConfig {
 pub struct CandidateScore {
     /// The candidate.
     pub effect: Effect,
+    /// State effect or form error.
+    pub family: Family,
     /// Testable on this data (else `reason`).
     pub testable: bool,
-    /// Why not testable.
+    /// Why not testable, or why not named.
     pub reason: String,
-    /// Parameters it adds.
+    /// Parameters it adds (coefficients the data determine, plus discrete choices).
     pub n_params: usize,
     /// Held-out χ² of the present model.
     pub chi2_before_heldout: f64,
@@ -84,6 +101,8 @@ pub struct CandidateScore {
     pub folds: usize,
     /// Evidence: (Δχ² − k·ln N) / χ²_before on held-out sweeps.
     pub evidence: f64,
+    /// Block-bootstrap p-value over sweeps of "the penalised held-out gain is ≤ 0".
+    pub p_value: f64,
     /// Held-out χ² reduction per channel.
     pub delta_chi2_by_channel: [f64; 4],
     /// Significant (would be named if best).
@@ -93,13 +112,17 @@ pub struct CandidateScore {
     pub form_corrected: bool,
 }
 
-/// A named effect with its evidence and before/after RMS.
+/// A named effect (or form error) with its evidence and before/after RMS.
 #[derive(Debug, Clone, Serialize)]
 pub struct NamedEffect {
     /// The effect.
     pub effect: Effect,
+    /// State effect or form error.
+    pub family: Family,
     /// Its evidence score.
     pub evidence: f64,
+    /// Its bootstrap p-value.
+    pub p_value: f64,
     /// The best other candidate of the round and its evidence.
     pub runner_up: Option<(Effect, f64)>,
     /// Main channel (largest held-out χ² reduction).
@@ -116,6 +139,8 @@ pub struct NamedEffect {
     pub rms_before_heldout: f64,
     /// … and with it.
     pub rms_after_heldout: f64,
+    /// Held-out RMS of every channel over all points, before and after the addition (SI).
+    pub channels_heldout: [[f64; 2]; 4],
     /// Correlation of the present residual (main channel) with the effect's predicted change.
     pub correlation: f64,
     /// The RMS before/after are of the residual left after the form error common to all
@@ -158,7 +183,8 @@ pub struct RmsTable {
 /// Everything a diagnosis found.
 #[derive(Debug, Clone, Serialize)]
 pub struct Diagnosis {
-    /// Effects named, in order.
+    /// Everything added to the model, in order: state effects and form errors (see
+    /// [`Diagnosis::state_effects`], [`Diagnosis::form_errors`]).
     pub named: Vec<NamedEffect>,
     /// Candidate scores per round.
     pub rounds: Vec<Vec<CandidateScore>>,
@@ -172,6 +198,8 @@ pub struct Diagnosis {
     pub sweeps: usize,
     /// Why the search stopped.
     pub stop_reason: String,
+    /// State effects these logs cannot tell from the operating point, each with what to do.
+    pub not_identifiable: Vec<String>,
     /// Reference temperature of the thermal extension [°C].
     pub t_ref_c: f64,
     /// Reference speed of the speed extension [m/s].
@@ -187,6 +215,18 @@ pub struct Diagnosis {
     /// Plot data (not serialised).
     #[serde(skip)]
     pub plot: PlotData,
+}
+
+impl Diagnosis {
+    /// The missing effects of the tyre's state named, in order.
+    pub fn state_effects(&self) -> impl Iterator<Item = &NamedEffect> {
+        self.named.iter().filter(|n| n.family == Family::State)
+    }
+
+    /// The operating-point misfits of the model mended by refits (its form error), in order.
+    pub fn form_errors(&self) -> impl Iterator<Item = &NamedEffect> {
+        self.named.iter().filter(|n| n.family == Family::FormError)
+    }
 }
 
 /// Arrays the report plots from.
@@ -209,9 +249,6 @@ pub struct PlotData {
     pub region: Vec<Vec<usize>>,
 }
 
-/// A candidate's score with its effect set and held-out predictions (testable candidates).
-type Scored = (CandidateScore, Option<(Vec<FitSpec>, Vec<[f64; 4]>)>);
-
 /// The present model's form error, cross-fitted per fold and from all other sweeps.
 struct FormError {
     /// Per fold: the correction of every point (held-out from training sweeps, training points
@@ -222,6 +259,21 @@ struct FormError {
     /// Held-out predictions of the present model plus the correction.
     before_heldout: Vec<[f64; 4]>,
 }
+
+/// A candidate's fit: everything needed to judge and accept it.
+#[derive(Debug, Clone)]
+struct CandidateFit {
+    /// The whole model after adding it, fitted on all sweeps.
+    model: Vec<EffectParams>,
+    /// The model's predictions on all sweeps (without any correction).
+    pred_fit: Vec<[f64; 4]>,
+    /// Held-out predictions (with the held-out correction where form-corrected).
+    pred_ho: Vec<[f64; 4]>,
+    /// Nonlinear effects' specs after adding it (state effects are not among them).
+    specs: Vec<FitSpec>,
+}
+
+type Scored = (CandidateScore, Option<CandidateFit>);
 
 fn add(a: &[[f64; 4]], b: &[[f64; 4]]) -> Vec<[f64; 4]> {
     a.iter().zip(b).map(|(x, y)| std::array::from_fn(|ch| x[ch] + y[ch])).collect()
@@ -245,6 +297,440 @@ fn rms_of(meas: &[[f64; 4]], pred: &[[f64; 4]], ch: usize, which: &[usize]) -> f
 
 fn total(c: [f64; 4]) -> f64 {
     c.iter().sum()
+}
+
+/// Block bootstrap over sweeps of the penalised held-out gain: the share of resamples of the
+/// sweeps (with replacement) whose total Δχ² does not exceed the penalty. Sweeps, not points,
+/// are the blocks: points of one sweep share its state and its misfit.
+fn bootstrap_p(per_sweep_gain: &[f64], penalty: f64, resamples: usize, seed: u64) -> f64 {
+    let n = per_sweep_gain.len();
+    if n == 0 || resamples == 0 {
+        return 1.0;
+    }
+    let mut rng = seed ^ 0x9e37_79b9_7f4a_7c15;
+    let mut next = || {
+        // splitmix64: deterministic, so a diagnosis is reproducible.
+        rng = rng.wrapping_add(0x9e37_79b9_7f4a_7c15);
+        let mut z = rng;
+        z = (z ^ (z >> 30)).wrapping_mul(0xbf58_476d_1ce4_e5b9);
+        z = (z ^ (z >> 27)).wrapping_mul(0x94d0_49bb_1331_11eb);
+        z ^ (z >> 31)
+    };
+    let mut fail = 0usize;
+    for _ in 0..resamples {
+        let s: f64 = (0..n).map(|_| per_sweep_gain[(next() % n as u64) as usize]).sum();
+        if s <= penalty {
+            fail += 1;
+        }
+    }
+    (fail as f64 + 1.0) / (resamples as f64 + 1.0)
+}
+
+/// Held-out χ² gain (before − after) per sweep.
+fn gain_per_sweep(
+    ds: &Dataset,
+    meas: &[[f64; 4]],
+    before: &[[f64; 4]],
+    after: &[[f64; 4]],
+    sigma: &[f64; 4],
+) -> Vec<f64> {
+    let mut g = vec![0.0; ds.sweeps.len()];
+    for k in 0..ds.len() {
+        let sw = ds.point_sweep(k);
+        if let Some(v) = g.get_mut(sw) {
+            for ch in 0..4 {
+                let (b, a) = ((meas[k][ch] - before[k][ch]) / sigma[ch], (meas[k][ch] - after[k][ch]) / sigma[ch]);
+                if b.is_finite() && a.is_finite() {
+                    *v += b * b - a * a;
+                }
+            }
+        }
+    }
+    g
+}
+
+/// The fixed inputs of a diagnosis, shared by every round.
+struct Ctx<'a> {
+    ds: &'a Dataset,
+    base: &'a TyreParams,
+    cfg: &'a DoctorConfig,
+    ev: Evaluator<'a>,
+    meas: Vec<[f64; 4]>,
+    sigma: [f64; 4],
+    fl: Vec<Vec<usize>>,
+    fold_of: Vec<usize>,
+    all: Vec<usize>,
+    n_res: f64,
+    coverage: Coverage,
+}
+
+/// The present model of a round and what scoring against it needs.
+struct Round<'r> {
+    /// Everything added so far, fitted on all sweeps.
+    present: &'r [EffectParams],
+    /// Specs of the nonlinear effects added so far (refitted with a new nonlinear candidate).
+    specs: &'r [FitSpec],
+    /// Held-out predictions of the present model.
+    cur_ho: &'r [[f64; 4]],
+    /// Its form error, where state candidates are scored against it.
+    form_error: Option<&'r FormError>,
+    /// The present model linearised in its scaling factors.
+    lin: &'r linfit::Linearization,
+}
+
+impl Round<'_> {
+    fn state_effects(&self) -> Vec<EffectParams> {
+        self.present.iter().filter(|e| state::is_state_scaling(e.effect)).cloned().collect()
+    }
+
+    fn nonstate_effects(&self) -> Vec<EffectParams> {
+        self.present.iter().filter(|e| !state::is_state_scaling(e.effect)).cloned().collect()
+    }
+}
+
+fn present_terms(effects: &[EffectParams]) -> Vec<Vec<Term>> {
+    effects.iter().map(|e| e.parsed().terms.into_iter().map(|(t, _)| t).collect()).collect()
+}
+
+impl Ctx<'_> {
+    fn untestable(&self, eff: Effect, chi_before: f64, reason: String) -> Scored {
+        let s = CandidateScore {
+            effect: eff,
+            family: eff.family(),
+            testable: false,
+            reason,
+            n_params: 0,
+            chi2_before_heldout: chi_before,
+            chi2_after_heldout: chi_before,
+            folds_improved: 0,
+            folds: self.fl.len(),
+            evidence: 0.0,
+            p_value: 1.0,
+            delta_chi2_by_channel: [0.0; 4],
+            significant: false,
+            form_corrected: false,
+        };
+        (s, None)
+    }
+
+    /// Scores a candidate against the round's model (`corrected`: against model + form error).
+    fn score(&self, r: &Round<'_>, eff: Effect, corrected: bool, m_tests: usize) -> Scored {
+        if let Some(reason) = untestable_reason(eff, self.ds) {
+            return self.untestable(eff, 0.0, reason);
+        }
+        let fe = r.form_error.filter(|_| corrected);
+        let before_ho: &[[f64; 4]] = fe.map_or(r.cur_ho, |f| &f.before_heldout);
+        let fitted =
+            if state::is_state_scaling(eff) { self.fit_state(r, eff, fe) } else { self.fit_nonlinear(r, eff, fe) };
+        let Some((fit, k)) = fitted else {
+            return self.untestable(eff, 0.0, "no coefficient the data determine".to_owned());
+        };
+        let fold_chi_before: Vec<f64> =
+            self.fl.iter().map(|f| total(chi2(&self.meas, before_ho, &self.sigma, f))).collect();
+        let fold_chi: Vec<f64> =
+            self.fl.iter().map(|f| total(chi2(&self.meas, &fit.pred_ho, &self.sigma, f))).collect();
+        let chi_before: f64 = fold_chi_before.iter().sum();
+        let chi_after: f64 = fold_chi.iter().sum();
+        let improved = fold_chi.iter().zip(&fold_chi_before).filter(|(a, b)| a < b).count();
+        let cb = chi2(&self.meas, before_ho, &self.sigma, &self.all);
+        let ca = chi2(&self.meas, &fit.pred_ho, &self.sigma, &self.all);
+        let penalty = k as f64 * self.n_res.ln();
+        let evidence = (chi_before - chi_after - penalty) / chi_before;
+        let gains = gain_per_sweep(self.ds, &self.meas, before_ho, &fit.pred_ho, &self.sigma);
+        let p_value = bootstrap_p(&gains, penalty, self.cfg.bootstrap_resamples, eff as u64);
+        let alpha = self.cfg.false_naming_rate / m_tests.max(1) as f64;
+        let significant = evidence >= self.cfg.min_evidence && improved + 1 >= self.fl.len() && p_value <= alpha;
+        let reason = if evidence >= self.cfg.min_evidence && p_value > alpha {
+            format!("not significant: bootstrap p = {p_value:.3} > {alpha:.4} (gain not consistent over sweeps)")
+        } else {
+            String::new()
+        };
+        let s = CandidateScore {
+            effect: eff,
+            family: eff.family(),
+            testable: true,
+            reason,
+            n_params: k,
+            chi2_before_heldout: chi_before,
+            chi2_after_heldout: chi_after,
+            folds_improved: improved,
+            folds: self.fl.len(),
+            evidence,
+            p_value,
+            delta_chi2_by_channel: std::array::from_fn(|ch| cb[ch] - ca[ch]),
+            significant,
+            form_corrected: fe.is_some(),
+        };
+        (s, Some(fit))
+    }
+
+    /// A whole-tyre state candidate: its discrete choice by the all-sweeps fit, its terms by
+    /// linear least squares through the sensitivities (one Gauss–Newton step), held-out
+    /// predictions by refitting every coefficient of the state effects per fold.
+    fn fit_state(&self, r: &Round<'_>, eff: Effect, fe: Option<&FormError>) -> Option<(CandidateFit, usize)> {
+        let terms = state::terms(eff, self.coverage);
+        if terms.is_empty() {
+            return None;
+        }
+        let present = r.state_effects();
+        let pterms = present_terms(&present);
+        let target_all = |k: usize| -> [f64; 4] {
+            match fe {
+                Some(f) => std::array::from_fn(|ch| self.meas[k][ch] - f.all[k][ch]),
+                None => self.meas[k],
+            }
+        };
+        let choice = Choice::grid(eff)
+            .into_iter()
+            .map(|c| {
+                let d = linfit::with_candidate(&self.ev, &present, &pterms, eff, c, terms.clone());
+                (c, linfit::chi2_after_solve(&self.ev, &d, r.lin, &target_all, &self.sigma))
+            })
+            .min_by(|a, b| a.1.total_cmp(&b.1))
+            .map(|(c, _)| c)?;
+        let design = linfit::with_candidate(&self.ev, &present, &pterms, eff, choice, terms);
+        let slot = present.len();
+        let k = linfit::determined_columns(&self.ev, &design, r.lin, &self.sigma, slot) + Choice::n_knobs(eff);
+        if k == Choice::n_knobs(eff) {
+            return None;
+        }
+        let fixed = r.nonstate_effects();
+        let fitted = linfit::fit_all(&self.ev, design, r.lin, &fixed, &target_all, &self.sigma);
+        let target_fold = |fi: usize, k: usize| -> [f64; 4] {
+            match fe {
+                Some(f) => std::array::from_fn(|ch| self.meas[k][ch] - f.per_fold[fi][k][ch]),
+                None => self.meas[k],
+            }
+        };
+        let add_fold = |fi: usize, k: usize| -> [f64; 4] {
+            match fe {
+                Some(f) => f.per_fold[fi][k],
+                None => [0.0; 4],
+            }
+        };
+        let pred_ho =
+            linfit::cross_validate(&fitted.design, &fitted.lin, &self.fl, &target_fold, &add_fold, &self.sigma);
+        let model: Vec<EffectParams> = fixed.into_iter().chain(fitted.effects).collect();
+        Some((CandidateFit { model, pred_fit: fitted.lin.pred, pred_ho, specs: r.specs.to_vec() }, k))
+    }
+
+    /// A nonlinear candidate (transient, the refits): Levenberg–Marquardt per fold with the
+    /// nonlinear effects already named, the state effects held at their fit.
+    fn fit_nonlinear(&self, r: &Round<'_>, eff: Effect, fe: Option<&FormError>) -> Option<(CandidateFit, usize)> {
+        let new = FitSpec { effect: eff, params: param_specs(eff, self.ds, self.base) };
+        let k = new.params.len();
+        if k == 0 {
+            return None;
+        }
+        let mut specs = r.specs.to_vec();
+        specs.push(new);
+        let fixed = r.state_effects();
+        let (ev, meas, sigma, opt) = (&self.ev, &self.meas, self.sigma, self.cfg.fit);
+        let pred_ho = match fe {
+            Some(f) => cross_validate_corrected(ev, &specs, &fixed, &self.fl, meas, sigma, opt, &f.per_fold),
+            None => cross_validate(ev, &specs, &fixed, &self.fl, meas, sigma, opt),
+        };
+        let target = match fe {
+            Some(f) => residual(meas, &f.all),
+            None => meas.clone(),
+        };
+        let (fitted, _) = fit_effects(ev, &specs, &fixed, &self.all, &target, sigma, opt);
+        let model: Vec<EffectParams> = fitted.into_iter().chain(fixed).collect();
+        let pred_fit = ev.predict(&model, &self.all);
+        Some((CandidateFit { model, pred_fit, pred_ho, specs }, k))
+    }
+}
+
+/// A candidate accepted into the model.
+struct Accepted {
+    named: NamedEffect,
+    fit: CandidateFit,
+    /// The model's own held-out predictions (without the correction).
+    pred_ho_model: Vec<[f64; 4]>,
+    region: Vec<usize>,
+    /// Before/after on the fit and held-out, as plotted (with the correction where scored so).
+    plots: [Vec<[f64; 4]>; 4],
+}
+
+impl Ctx<'_> {
+    /// Judges a significant candidate: its fit must cut the held-out residual in its own region
+    /// (else it soaks up something else) and make no channel worse on held-out sweeps.
+    fn judge(
+        &self,
+        r: &Round<'_>,
+        score: &CandidateScore,
+        fit: CandidateFit,
+        cur_fit: &[[f64; 4]],
+        runner_up: Option<(Effect, f64)>,
+    ) -> Result<Accepted, String> {
+        let fe = r.form_error.filter(|_| score.form_corrected);
+        let (meas, sigma) = (&self.meas, &self.sigma);
+        let (before_fit_c, after_fit_c, before_ho_c) = match fe {
+            Some(f) => (add(cur_fit, &f.all), add(&fit.pred_fit, &f.all), f.before_heldout.clone()),
+            None => (cur_fit.to_vec(), fit.pred_fit.clone(), r.cur_ho.to_vec()),
+        };
+        let ch = (0..4)
+            .max_by(|&a, &b| score.delta_chi2_by_channel[a].total_cmp(&score.delta_chi2_by_channel[b]))
+            .unwrap_or(CH_FY);
+        // Region: where the new effect moves the prediction of the main channel beyond noise.
+        let mut thr = self.cfg.region_sigma;
+        let mut region: Vec<usize>;
+        loop {
+            region = self
+                .all
+                .iter()
+                .copied()
+                .filter(|&k| {
+                    ((fit.pred_fit[k][ch] - cur_fit[k][ch]) / sigma[ch]).abs() > thr && meas[k][ch].is_finite()
+                })
+                .collect();
+            if region.len() >= 20 || thr <= 0.5 {
+                break;
+            }
+            thr /= 2.0;
+        }
+        let before_ho = rms_of(meas, &before_ho_c, ch, &region);
+        let after_ho = rms_of(meas, &fit.pred_ho, ch, &region);
+        if after_ho > (1.0 - self.cfg.min_region_cut) * before_ho {
+            return Err(format!(
+                "rejected: held-out {} RMS in its own region {:.4} → {:.4} (needs ≥ {:.0} % less)",
+                CHANNELS[ch],
+                before_ho,
+                after_ho,
+                100.0 * self.cfg.min_region_cut
+            ));
+        }
+        // Adding never harms: every diagnosed channel's held-out χ² no worse than before, beyond
+        // the share `harm_tolerance` and three standard deviations of a χ² of that channel's
+        // residual count (a nearly empty channel scatters by more than a share of itself).
+        let cb = chi2(meas, &before_ho_c, sigma, &self.all);
+        let ca = chi2(meas, &fit.pred_ho, sigma, &self.all);
+        let n_ch: [f64; 4] =
+            std::array::from_fn(|c| self.all.iter().filter(|&&k| meas[k][c].is_finite()).count() as f64);
+        let harmed = |c: usize| ca[c] - cb[c] > self.cfg.harm_tolerance * cb[c] + 3.0 * (2.0 * n_ch[c]).sqrt();
+        if let Some(worse) = (0..4).find(|&c| cb[c] > 0.0 && harmed(c)) {
+            return Err(format!(
+                "rejected: held-out {} worse with it (χ² {:.0} → {:.0}, RMS {:.4} → {:.4})",
+                CHANNELS[worse],
+                cb[worse],
+                ca[worse],
+                rms_of(meas, &before_ho_c, worse, &self.all),
+                rms_of(meas, &fit.pred_ho, worse, &self.all)
+            ));
+        }
+        let channels_heldout: [[f64; 2]; 4] = std::array::from_fn(|c| {
+            [rms_of(meas, &before_ho_c, c, &self.all), rms_of(meas, &fit.pred_ho, c, &self.all)]
+        });
+        let corr = correlation(
+            self.all.iter().map(|&k| meas[k][ch] - cur_fit[k][ch]),
+            self.all.iter().map(|&k| fit.pred_fit[k][ch] - cur_fit[k][ch]),
+        );
+        let params = fit.model.iter().find(|e| e.effect == score.effect).cloned().unwrap_or(EffectParams {
+            effect: score.effect,
+            keys: vec![],
+            values: vec![],
+        });
+        let named = NamedEffect {
+            effect: score.effect,
+            family: score.family,
+            evidence: score.evidence,
+            p_value: score.p_value,
+            runner_up,
+            channel: CHANNELS[ch].to_owned(),
+            region: describe_region(self.ds, score.effect, &region, thr),
+            region_points: region.len(),
+            rms_before: rms_of(meas, &before_fit_c, ch, &region),
+            rms_after: rms_of(meas, &after_fit_c, ch, &region),
+            rms_before_heldout: before_ho,
+            rms_after_heldout: after_ho,
+            channels_heldout,
+            correlation: corr,
+            form_corrected: fe.is_some(),
+            params,
+        };
+        // The model's own held-out predictions go on to the next round (the correction is not
+        // part of the model).
+        let pred_ho_model: Vec<[f64; 4]> = match fe {
+            Some(f) => (0..self.ds.len())
+                .map(|k| std::array::from_fn(|c| fit.pred_ho[k][c] - f.per_fold[self.fold_of[k]][k][c]))
+                .collect(),
+            None => fit.pred_ho.clone(),
+        };
+        let plots = [before_fit_c, after_fit_c, before_ho_c, fit.pred_ho.clone()];
+        Ok(Accepted { named, fit, pred_ho_model, region, plots })
+    }
+
+    /// Scores `todo` on the configured worker threads, results in `todo`'s order.
+    fn score_all(&self, r: &Round<'_>, todo: &[Effect], m_tests: usize) -> Vec<Scored> {
+        let threads = self.cfg.threads.max(1).min(todo.len().max(1));
+        let mut results: Vec<Option<Scored>> = vec![None; todo.len()];
+        std::thread::scope(|sc| {
+            let chunks: Vec<Vec<(usize, Effect)>> =
+                (0..threads).map(|t| todo.iter().copied().enumerate().skip(t).step_by(threads).collect()).collect();
+            let handles: Vec<_> = chunks
+                .into_iter()
+                .map(|chunk| {
+                    sc.spawn(move || {
+                        chunk
+                            .into_iter()
+                            .map(|(i, e)| {
+                                let corrected = r.form_error.is_some() && e.family() == Family::State;
+                                (i, self.score(r, e, corrected, m_tests))
+                            })
+                            .collect::<Vec<_>>()
+                    })
+                })
+                .collect();
+            for h in handles {
+                // A worker only panics on a bug; surface it rather than hide a candidate.
+                for (i, s) in h.join().expect("candidate worker") {
+                    results[i] = Some(s);
+                }
+            }
+        });
+        results.into_iter().flatten().collect()
+    }
+
+    /// State candidates that explain the data only when scored without the form error: the
+    /// logs cannot tell them from the operating point.
+    fn not_identifiable(&self, r: &Round<'_>, scores: &[CandidateScore], m_tests: usize) -> Vec<String> {
+        let mut out = Vec::new();
+        for s in scores.iter().filter(|s| s.testable && s.form_corrected && !s.significant) {
+            if s.effect == Effect::Transient {
+                continue;
+            }
+            let (plain, _) = self.score(r, s.effect, false, m_tests);
+            if plain.significant {
+                out.push(format!(
+                    "{} not identifiable from these logs: it explains {:.1} % of the held-out residual when the model's \
+                     operating-point misfit is left in, {:.1} % once it is taken out — its state varies with the \
+                     operating point ({}); revisit a cell at another {}",
+                    s.effect.name(),
+                    100.0 * plain.evidence,
+                    100.0 * s.evidence,
+                    revisit_hint(s.effect).0,
+                    revisit_hint(s.effect).1
+                ));
+            }
+        }
+        out
+    }
+}
+
+/// What a state effect needs to be told from the operating point.
+fn revisit_hint(e: Effect) -> (&'static str, &'static str) {
+    match e {
+        Effect::Thermal => {
+            ("each cell visited once, at one temperature", "temperature (after a thermal pause or a warm-up)")
+        }
+        Effect::Wear | Effect::BreakIn => (
+            "each cell visited once, at one stage of the tyre's life",
+            "stage of the tyre's life (repeat a sweep late in the test)",
+        ),
+        Effect::Speed => ("each cell run at one speed", "speed"),
+        Effect::Specimen => ("each tyre run over its own cells", "cell on both tyres"),
+        _ => ("", ""),
+    }
 }
 
 /// Runs the doctor on `ds` with the base model `base`.
@@ -280,21 +766,28 @@ pub fn diagnose(ds: &Dataset, base: &TyreParams, cfg: &DoctorConfig) -> Result<D
             fold_of[k] = fi;
         }
     }
+    let coverage = Coverage {
+        lateral: ds.has_lateral() || !ds.has_longitudinal(),
+        longitudinal: ds.has_longitudinal(),
+        radius: meas.iter().any(|m| m[CH_RL].is_finite()),
+        tyres: ds.points.iter().map(|&i| ds.series.tyre[i]).max().map_or(0, |m| m + 1),
+    };
     let bandwidths = Bandwidths::from_data(ds);
     let regions = find_regions(ds, &meas, &base_pred, &sigma);
+    let ctx = Ctx { ds, base, cfg, ev, meas, sigma, fl, fold_of, all, n_res, coverage };
 
-    let mut chosen: Vec<FitSpec> = Vec::new();
+    let mut present: Vec<EffectParams> = Vec::new();
+    let mut specs: Vec<FitSpec> = Vec::new();
     let mut cur_fit = base_pred.clone();
     let mut cur_ho = base_pred.clone();
-    let mut named = Vec::new();
+    let mut named: Vec<NamedEffect> = Vec::new();
     let mut rounds = Vec::new();
-    let mut plot = PlotData { meas: meas.clone(), base: base_pred.clone(), ..Default::default() };
+    let mut plot = PlotData { meas: ctx.meas.clone(), base: base_pred.clone(), ..Default::default() };
     let mut stop_reason = String::new();
-    let mut final_params: Vec<EffectParams> = Vec::new();
+    let mut not_identifiable = Vec::new();
 
     while named.len() < cfg.max_effects {
-        let fold_chi_before: Vec<f64> = fl.iter().map(|f| total(chi2(&meas, &cur_ho, &sigma, f))).collect();
-        let chi_before: f64 = fold_chi_before.iter().sum();
+        let chi_before: f64 = total(chi2(&ctx.meas, &cur_ho, &ctx.sigma, &ctx.all));
         let excess = chi_before / n_res - 1.0;
         if excess < cfg.min_excess {
             stop_reason = format!(
@@ -307,234 +800,81 @@ pub fn diagnose(ds: &Dataset, base: &TyreParams, cfg: &DoctorConfig) -> Result<D
         }
         // The present model's form error (state candidates are scored against it).
         let form_error = cfg.form_correction.then(|| {
-            let per_fold = form::cross_fitted(ds, &residual(&meas, &cur_ho), &fl, &bandwidths);
-            let all_corr = form::leave_one_sweep_out(ds, &residual(&meas, &cur_fit), &bandwidths);
-            let before_heldout: Vec<[f64; 4]> =
-                (0..ds.len()).map(|k| std::array::from_fn(|ch| cur_ho[k][ch] + per_fold[fold_of[k]][k][ch])).collect();
+            let per_fold = form::cross_fitted(ds, &residual(&ctx.meas, &cur_ho), &ctx.fl, &bandwidths);
+            let all_corr = form::leave_one_sweep_out(ds, &residual(&ctx.meas, &cur_fit), &bandwidths);
+            let before_heldout: Vec<[f64; 4]> = (0..ds.len())
+                .map(|k| std::array::from_fn(|ch| cur_ho[k][ch] + per_fold[ctx.fold_of[k]][k][ch]))
+                .collect();
             FormError { per_fold, all: all_corr, before_heldout }
         });
-        let corrected_for = |eff: Effect| form_error.as_ref().filter(|_| !eff.is_refit());
+        let lin = linfit::linearize(&ctx.ev, &present);
+        let round =
+            Round { present: &present, specs: &specs, cur_ho: &cur_ho, form_error: form_error.as_ref(), lin: &lin };
         let todo: Vec<Effect> =
-            cfg.candidates.iter().copied().filter(|e| !chosen.iter().any(|c| c.effect == *e)).collect();
-        let score_one = |eff: Effect| -> Scored {
-            if let Some(reason) = untestable_reason(eff, ds) {
-                let s = CandidateScore {
-                    effect: eff,
-                    testable: false,
-                    reason,
-                    n_params: 0,
-                    chi2_before_heldout: chi_before,
-                    chi2_after_heldout: chi_before,
-                    folds_improved: 0,
-                    folds: fl.len(),
-                    evidence: 0.0,
-                    delta_chi2_by_channel: [0.0; 4],
-                    significant: false,
-                    form_corrected: false,
-                };
-                return (s, None);
-            }
-            let fe = corrected_for(eff);
-            let before_ho = fe.map_or(&cur_ho, |f| &f.before_heldout);
-            let fold_chi_before: Vec<f64> = match fe {
-                Some(_) => fl.iter().map(|f| total(chi2(&meas, before_ho, &sigma, f))).collect(),
-                None => fold_chi_before.clone(),
-            };
-            let chi_before: f64 = fold_chi_before.iter().sum();
-            let mut specs = chosen.clone();
-            let new = FitSpec { effect: eff, params: param_specs(eff, ds, base) };
-            let k = new.params.len() + usize::from(eff == Effect::BreakIn);
-            specs.push(new);
-            let pred = match fe {
-                Some(f) => cross_validate_corrected(&ev, &specs, &fl, &meas, sigma, cfg.fit, &f.per_fold),
-                None => cross_validate(&ev, &specs, &fl, &meas, sigma, cfg.fit),
-            };
-            let fold_chi: Vec<f64> = fl.iter().map(|f| total(chi2(&meas, &pred, &sigma, f))).collect();
-            let chi_after: f64 = fold_chi.iter().sum();
-            let improved = fold_chi.iter().zip(&fold_chi_before).filter(|(a, b)| a < b).count();
-            let cb = chi2(&meas, before_ho, &sigma, &all);
-            let ca = chi2(&meas, &pred, &sigma, &all);
-            let evidence = (chi_before - chi_after - k as f64 * n_res.ln()) / chi_before;
-            let significant = evidence >= cfg.min_evidence && improved + 1 >= fl.len();
-            let s = CandidateScore {
-                effect: eff,
-                testable: true,
-                reason: String::new(),
-                n_params: k,
-                chi2_before_heldout: chi_before,
-                chi2_after_heldout: chi_after,
-                folds_improved: improved,
-                folds: fl.len(),
-                evidence,
-                delta_chi2_by_channel: [cb[0] - ca[0], cb[1] - ca[1], cb[2] - ca[2], cb[3] - ca[3]],
-                significant,
-                form_corrected: fe.is_some(),
-            };
-            (s, Some((specs, pred)))
-        };
-        // Candidates are independent: score them on `threads` workers, results in catalogue order.
-        let threads = cfg.threads.max(1).min(todo.len().max(1));
-        let mut results: Vec<Option<Scored>> = vec![None; todo.len()];
-        std::thread::scope(|sc| {
-            let chunks: Vec<Vec<(usize, Effect)>> =
-                (0..threads).map(|t| todo.iter().copied().enumerate().skip(t).step_by(threads).collect()).collect();
-            let handles: Vec<_> = chunks
-                .into_iter()
-                .map(|chunk| sc.spawn(|| chunk.into_iter().map(|(i, e)| (i, score_one(e))).collect::<Vec<_>>()))
-                .collect();
-            for h in handles {
-                // A worker only panics on a bug; surface it rather than hide a candidate.
-                for (i, r) in h.join().expect("candidate worker") {
-                    results[i] = Some(r);
-                }
-            }
-        });
-        let (mut scores, cv_preds): (Vec<CandidateScore>, Vec<_>) = results.into_iter().flatten().unzip();
+            cfg.candidates.iter().copied().filter(|e| !named.iter().any(|n| n.effect == *e)).collect();
+        let m_tests = todo.iter().filter(|e| untestable_reason(**e, ds).is_none()).count();
+        let (mut scores, fits): (Vec<CandidateScore>, Vec<Option<CandidateFit>>) =
+            ctx.score_all(&round, &todo, m_tests).into_iter().unzip();
         let mut order: Vec<usize> = (0..scores.len()).filter(|&i| scores[i].testable).collect();
         order.sort_by(|&a, &b| scores[b].evidence.total_cmp(&scores[a].evidence));
-        // Take the significant candidates in order of evidence; the first whose fit also cuts
-        // the held-out residual in its own region is named. An effect that helps χ² overall
-        // while its region gets worse is not the effect in the data.
+        // Take the significant candidates in order of evidence; the first that passes the
+        // judgement (its own region cut, no channel harmed) is added.
         let mut accepted = None;
         for (pos, &bi) in order.iter().enumerate() {
             if !scores[bi].significant {
-                break;
-            }
-            let Some((specs, pred_ho)) = cv_preds[bi].clone() else { continue };
-            let score = scores[bi].clone();
-            let fe = corrected_for(score.effect);
-            // With the form error: fitted to what the other sweeps at the same operating point
-            // do not explain, and judged against the present model plus that correction.
-            let (fitted, _) = match fe {
-                Some(f) => fit_effects(&ev, &specs, &all, &residual(&meas, &f.all), sigma, cfg.fit),
-                None => fit_effects(&ev, &specs, &all, &meas, sigma, cfg.fit),
-            };
-            let pred_fit = ev.predict(&fitted, &all);
-            let (before_fit_c, after_fit_c, before_ho_c) = match fe {
-                Some(f) => (add(&cur_fit, &f.all), add(&pred_fit, &f.all), f.before_heldout.clone()),
-                None => (cur_fit.clone(), pred_fit.clone(), cur_ho.clone()),
-            };
-            let ch = (0..4)
-                .max_by(|&a, &b| score.delta_chi2_by_channel[a].total_cmp(&score.delta_chi2_by_channel[b]))
-                .unwrap_or(CH_FY);
-            // Region: where the new effect moves the prediction of the main channel beyond noise.
-            let mut thr = cfg.region_sigma;
-            let mut region: Vec<usize>;
-            loop {
-                region = all
-                    .iter()
-                    .copied()
-                    .filter(|&k| {
-                        ((pred_fit[k][ch] - cur_fit[k][ch]) / sigma[ch]).abs() > thr && meas[k][ch].is_finite()
-                    })
-                    .collect();
-                if region.len() >= 20 || thr <= 0.5 {
-                    break;
-                }
-                thr /= 2.0;
-            }
-            let before_ho = rms_of(&meas, &before_ho_c, ch, &region);
-            let after_ho = rms_of(&meas, &pred_ho, ch, &region);
-            if after_ho > (1.0 - cfg.min_region_cut) * before_ho {
-                scores[bi].significant = false;
-                scores[bi].reason = format!(
-                    "rejected: held-out {} RMS in its own region {:.4} → {:.4} (needs ≥ {:.0} % less)",
-                    CHANNELS[ch],
-                    before_ho,
-                    after_ho,
-                    100.0 * cfg.min_region_cut
-                );
                 continue;
             }
+            let Some(fit) = fits[bi].clone() else { continue };
             let runner_up =
                 order.iter().enumerate().find(|(p, _)| *p != pos).map(|(_, &i)| (scores[i].effect, scores[i].evidence));
-            let corr = correlation(
-                all.iter().map(|&k| meas[k][ch] - cur_fit[k][ch]),
-                all.iter().map(|&k| pred_fit[k][ch] - cur_fit[k][ch]),
-            );
-            let eff_params = fitted.iter().find(|e| e.effect == score.effect).cloned().unwrap_or(EffectParams {
-                effect: score.effect,
-                keys: vec![],
-                values: vec![],
-                threshold_w: 0.0,
-            });
-            let ne = NamedEffect {
-                effect: score.effect,
-                evidence: score.evidence,
-                runner_up,
-                channel: CHANNELS[ch].to_owned(),
-                region: describe_region(ds, &ev, score.effect, &region, thr),
-                region_points: region.len(),
-                rms_before: rms_of(&meas, &before_fit_c, ch, &region),
-                rms_after: rms_of(&meas, &after_fit_c, ch, &region),
-                rms_before_heldout: before_ho,
-                rms_after_heldout: after_ho,
-                correlation: corr,
-                form_corrected: fe.is_some(),
-                params: eff_params,
-            };
-            // The model's own held-out predictions go on to the next round (the correction is
-            // not part of the model).
-            let pred_ho_model: Vec<[f64; 4]> = match fe {
-                Some(f) => (0..ds.len())
-                    .map(|k| std::array::from_fn(|c| pred_ho[k][c] - f.per_fold[fold_of[k]][k][c]))
-                    .collect(),
-                None => pred_ho.clone(),
-            };
-            let plots = [before_fit_c, after_fit_c, before_ho_c, pred_ho];
-            accepted = Some((ne, specs, pred_fit, pred_ho_model, fitted, region, plots));
-            break;
-        }
-        rounds.push(scores.clone());
-        let Some((ne, specs, pred_fit, pred_ho, fitted, region, plots)) = accepted else {
-            let best = order.first().copied();
-            stop_reason = match best {
-                Some(i) if !scores[i].reason.is_empty() => {
-                    format!(
-                        "no significant candidate left: the best, {}, was {}",
-                        scores[i].effect.name(),
-                        scores[i].reason
-                    )
+            match ctx.judge(&round, &scores[bi], fit, &cur_fit, runner_up) {
+                Ok(a) => {
+                    accepted = Some(a);
+                    break;
                 }
-                Some(i) => format!(
-                    "no significant candidate left: the best, {}, explains {:.1} % of the held-out χ² (needs {:.1} %) and improves {}/{} folds",
-                    scores[i].effect.name(),
-                    100.0 * scores[i].evidence,
-                    100.0 * cfg.min_evidence,
-                    scores[i].folds_improved,
-                    scores[i].folds
-                ),
-                None => "no testable candidate".to_owned(),
-            };
+                Err(why) => {
+                    scores[bi].significant = false;
+                    scores[bi].reason = why;
+                }
+            }
+        }
+        let Some(acc) = accepted else {
+            if form_error.is_some() {
+                not_identifiable = ctx.not_identifiable(&round, &scores, m_tests);
+            }
+            rounds.push(scores.clone());
+            stop_reason = no_candidate_reason(&scores, &order, cfg);
             break;
         };
-        named.push(ne);
-        let [before_fit_c, after_fit_c, before_ho_c, after_ho_c] = plots;
+        rounds.push(scores);
+        let [before_fit_c, after_fit_c, before_ho_c, after_ho_c] = acc.plots;
         plot.before.push(before_fit_c);
         plot.after.push(after_fit_c);
         plot.before_heldout.push(before_ho_c);
         plot.after_heldout.push(after_ho_c);
-        plot.region.push(region);
-        chosen = specs;
-        cur_fit = pred_fit;
-        cur_ho = pred_ho;
-        final_params = fitted;
+        plot.region.push(acc.region);
+        named.push(acc.named);
+        present = acc.fit.model;
+        specs = acc.fit.specs;
+        cur_fit = acc.fit.pred_fit;
+        cur_ho = acc.pred_ho_model;
     }
     if stop_reason.is_empty() {
         stop_reason = format!("stopped at the limit of {} effects", cfg.max_effects);
     }
     // Keep each named effect's parameters from the final joint fit.
     for ne in &mut named {
-        if let Some(p) = final_params.iter().find(|p| p.effect == ne.effect) {
+        if let Some(p) = present.iter().find(|p| p.effect == ne.effect) {
             ne.params = p.clone();
         }
     }
+    let (meas, sigma) = (&ctx.meas, ctx.sigma);
     let rms = RmsTable {
         channels: CHANNELS,
         noise: sigma,
-        base: std::array::from_fn(|ch| rms_of(&meas, &base_pred, ch, &all)),
-        final_fit: std::array::from_fn(|ch| rms_of(&meas, &cur_fit, ch, &all)),
-        final_heldout: std::array::from_fn(|ch| rms_of(&meas, &cur_ho, ch, &all)),
+        base: std::array::from_fn(|ch| rms_of(meas, &base_pred, ch, &ctx.all)),
+        final_fit: std::array::from_fn(|ch| rms_of(meas, &cur_fit, ch, &ctx.all)),
+        final_heldout: std::array::from_fn(|ch| rms_of(meas, &cur_ho, ch, &ctx.all)),
     };
     Ok(Diagnosis {
         named,
@@ -544,13 +884,33 @@ pub fn diagnose(ds: &Dataset, base: &TyreParams, cfg: &DoctorConfig) -> Result<D
         points: ds.len(),
         sweeps: ds.sweeps.len(),
         stop_reason,
-        t_ref_c: ev.t_ref_c,
-        v_ref_mps: ev.v_ref_mps,
+        not_identifiable,
+        t_ref_c: ctx.ev.t_ref_c,
+        v_ref_mps: ctx.ev.v_ref_mps,
         flash_decay_s: ds.flash_decay_s.clone(),
         not_diagnosed,
         form_correction: cfg.form_correction,
         plot,
     })
+}
+
+/// Why nothing was added in the last round.
+fn no_candidate_reason(scores: &[CandidateScore], order: &[usize], cfg: &DoctorConfig) -> String {
+    match order.first().copied() {
+        Some(i) if !scores[i].reason.is_empty() => {
+            format!("no significant candidate left: the best, {}, was {}", scores[i].effect.name(), scores[i].reason)
+        }
+        Some(i) => format!(
+            "no significant candidate left: the best, {}, explains {:.1} % of the held-out χ² (needs {:.1} %), improves {}/{} folds, bootstrap p = {:.3}",
+            scores[i].effect.name(),
+            100.0 * scores[i].evidence,
+            100.0 * cfg.min_evidence,
+            scores[i].folds_improved,
+            scores[i].folds,
+            scores[i].p_value
+        ),
+        None => "no testable candidate".to_owned(),
+    }
 }
 
 /// Pearson correlation.
@@ -579,7 +939,7 @@ fn percentile(mut v: Vec<f64>, q: f64) -> f64 {
     v[((v.len() - 1) as f64 * q).round() as usize]
 }
 
-fn describe_region(ds: &Dataset, ev: &Evaluator<'_>, effect: Effect, region: &[usize], thr: f64) -> String {
+fn describe_region(ds: &Dataset, effect: Effect, region: &[usize], thr: f64) -> String {
     if region.is_empty() {
         return "nowhere beyond the noise".to_owned();
     }
@@ -604,7 +964,6 @@ fn describe_region(ds: &Dataset, ev: &Evaluator<'_>, effect: Effect, region: &[u
     let (a, b) = range(&|i| effect.variable_value(ds, i));
     parts.push(format!("{name} {a:.2}–{b:.2} {unit}"));
     let sw: std::collections::BTreeSet<usize> = region.iter().map(|&k| ds.point_sweep(k)).collect();
-    let _ = ev;
     format!(
         "{} ({} of {} points, {} of {} sweeps, where the effect moves the prediction by > {:.1} σ)",
         parts.join(", "),
@@ -661,6 +1020,5 @@ fn find_regions(ds: &Dataset, meas: &[[f64; 4]], pred: &[[f64; 4]], sigma: &[f64
             });
         }
     }
-    let _ = CH_RL;
     out
 }

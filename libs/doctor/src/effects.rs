@@ -2,17 +2,20 @@
 //! MF-Tyre 6.1, and the evaluation of a base model with any set of extensions at the measured
 //! operating points.
 //!
-//! Two kinds of effect:
-//! - **Extensions** (`thermal`, `wear`, `break_in`, `transient`, `speed`): terms MF-Tyre 6.1
-//!   does not have, driven by a state variable the doctor derives from the log (grip temperature,
-//!   sliding energy, severe sliding energy, travelled distance, belt speed). They act through
-//!   the MF scaling factors λ per point (grip λμ, stiffness λK, shape λC), through the slips
-//!   (relaxation), or on the loaded radius.
-//! - **Refits** (`pressure`, `camber`, `load`, `offset`): effects MF-Tyre 6.1 models with its
-//!   own coefficients; the candidate re-fits those coefficients (a base model whose pressure
-//!   terms are zero, or wrong, is repaired where `tyrerig model eval` applies it directly).
+//! Two families:
+//! - **State effects** (`thermal`, `wear`, `break_in`, `speed`, `specimen`, `transient`): what
+//!   MF-Tyre 6.1 does not have, driven by a state of the tyre the doctor derives from the log
+//!   (grip temperature, sliding energy, severe sliding energy, belt speed, which tyre). All but
+//!   `transient` act on the whole tyre through the MF scaling factors ([`crate::state`]);
+//!   `transient` relaxes the slips.
+//! - **Form errors** (`pressure`, `camber`, `load`, `offset`): operating-point misfits of the
+//!   model MF-Tyre 6.1 could describe with its own coefficients; the candidate re-fits those
+//!   coefficients (a base model whose pressure terms are zero, or wrong, is repaired where
+//!   `tyrerig model eval` applies it directly). They are reported as the model's form error,
+//!   never as a missing effect of the tyre's state.
 
 use crate::data::Dataset;
+use crate::state;
 use mftyre::{MfInput, TyreParams, UseMode, evaluate_scaled};
 use serde::Serialize;
 
@@ -31,11 +34,11 @@ pub const CH_RL: usize = 3;
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Serialize, PartialOrd, Ord)]
 #[serde(rename_all = "snake_case")]
 pub enum Effect {
-    /// Tread temperature: grip and stiffness.
+    /// Tread temperature: the whole tyre with the (lagged) grip temperature.
     Thermal,
-    /// Tread wear: stiffness, shape and loaded radius with sliding energy.
+    /// Tread wear: the whole tyre and its loaded radius with sliding energy.
     Wear,
-    /// Break-in: a new tyre's grip deficit recovered with severe sliding.
+    /// Break-in: a new tyre's difference recovered with severe sliding.
     BreakIn,
     /// Transient relaxation of the slips.
     Transient,
@@ -49,11 +52,14 @@ pub enum Effect {
     Load,
     /// Ply-steer / conicity offsets (MF shift coefficients).
     Offset,
+    /// The tyre specimen: a later log's tyre differs from the first's (two physical tyres of
+    /// one model, as TTC's cornering and drive/brake runs often are).
+    Specimen,
 }
 
 impl Effect {
     /// Every effect, catalogue order.
-    pub const ALL: [Effect; 9] = [
+    pub const ALL: [Effect; 10] = [
         Effect::Thermal,
         Effect::Wear,
         Effect::BreakIn,
@@ -63,6 +69,7 @@ impl Effect {
         Effect::Speed,
         Effect::Load,
         Effect::Offset,
+        Effect::Specimen,
     ];
 
     /// Name in `doctor.json` and the extension section.
@@ -77,6 +84,7 @@ impl Effect {
             Effect::Speed => "speed",
             Effect::Load => "load",
             Effect::Offset => "offset",
+            Effect::Specimen => "specimen",
         }
     }
 
@@ -97,12 +105,18 @@ impl Effect {
             Effect::Speed => ("belt speed", "m/s"),
             Effect::Load => ("vertical load", "kN"),
             Effect::Offset => ("slip angle", "deg"),
+            Effect::Specimen => ("tyre (log) of the test", "#"),
         }
     }
 
     /// True for effects MF-Tyre 6.1 models with its own coefficients (the candidate refits them).
     pub fn is_refit(self) -> bool {
         matches!(self, Effect::Pressure | Effect::Camber | Effect::Load | Effect::Offset)
+    }
+
+    /// The family: a state effect of the tyre, or the model's form error at an operating point.
+    pub fn family(self) -> Family {
+        if self.is_refit() { Family::FormError } else { Family::State }
     }
 
     /// The effect's variable at series sample `i`.
@@ -117,12 +131,20 @@ impl Effect {
             Effect::Speed => s.v_mps[i],
             Effect::Load => s.fz_n[i] * 1e-3,
             Effect::Offset => s.alpha_deg[i],
+            Effect::Specimen => s.tyre[i] as f64,
         }
     }
 }
 
-/// Break-in's power thresholds tried (a discrete choice, fitted on the training sweeps) [W].
-pub const BREAK_IN_THRESHOLDS_W: [f64; 4] = [0.0, 5_000.0, 10_000.0, 20_000.0];
+/// The two families of what the doctor can add.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Family {
+    /// A state of the tyre MF-Tyre 6.1 lacks (named as a missing effect).
+    State,
+    /// An operating-point misfit MF-Tyre 6.1's own coefficients can mend (reported as form error).
+    FormError,
+}
 
 /// One parameter of an effect.
 #[derive(Debug, Clone, Serialize)]
@@ -169,6 +191,10 @@ pub fn untestable_reason(effect: Effect, ds: &Dataset) -> Option<String> {
             let r = ds.point_range(&s.sliding_energy_j) * 1e-6;
             (r < 0.01).then(|| format!("sliding energy spans only {r:.3} MJ"))
         }
+        Effect::Specimen => {
+            let n = ds.points.iter().map(|&i| s.tyre[i]).max().map_or(0, |m| m + 1);
+            (n < 2).then(|| "one tyre (log) only".to_owned())
+        }
         Effect::Transient | Effect::Offset => None,
     }
 }
@@ -187,19 +213,9 @@ pub fn param_specs(effect: Effect, ds: &Dataset, base: &TyreParams) -> Vec<Param
             .collect()
     };
     match effect {
-        Effect::Thermal => vec![
-            ps("THERMAL_MU0", 0.0, -0.5, 0.5),
-            ps("THERMAL_MU1", 0.0, -0.5, 0.5),
-            ps("THERMAL_MU2", 0.0, -0.5, 0.5),
-            ps("THERMAL_K0", 0.0, -0.5, 0.5),
-            ps("THERMAL_K1", 0.0, -0.5, 0.5),
-        ],
-        Effect::Wear => vec![
-            ps("WEAR_K_PER_MJ", 0.0, -2.0, 2.0),
-            ps("WEAR_C_PER_MJ", 0.0, -2.0, 2.0),
-            ps("WEAR_RL_MM_PER_MJ", 0.0, -20.0, 20.0),
-        ],
-        Effect::BreakIn => vec![ps("BREAKIN_DEFICIT", 0.02, -0.3, 0.6), ps("BREAKIN_LOG10_ENERGY_KJ", 2.0, -0.5, 5.0)],
+        // Fitted by linear least squares through the scaling factors' sensitivities
+        // ([`crate::linfit`]), not by Levenberg–Marquardt.
+        Effect::Thermal | Effect::Wear | Effect::BreakIn | Effect::Speed | Effect::Specimen => vec![],
         Effect::Transient => {
             let mut v = Vec::new();
             if lat {
@@ -212,7 +228,6 @@ pub fn param_specs(effect: Effect, ds: &Dataset, base: &TyreParams) -> Vec<Param
             }
             v
         }
-        Effect::Speed => vec![ps("SPEED_MU1", 0.0, -0.5, 0.5), ps("SPEED_K1", 0.0, -0.5, 0.5)],
         Effect::Pressure => {
             let mut keys = vec!["PFZ1"];
             if lat {
@@ -256,7 +271,8 @@ pub fn param_specs(effect: Effect, ds: &Dataset, base: &TyreParams) -> Vec<Param
     }
 }
 
-/// One effect with parameter values (and break-in's threshold).
+/// One effect with parameter values (a state effect's terms and choice of knobs, a refit's MF
+/// coefficients, the transient's relaxation lengths).
 #[derive(Debug, Clone, Serialize)]
 pub struct EffectParams {
     /// The effect.
@@ -265,13 +281,17 @@ pub struct EffectParams {
     pub keys: Vec<String>,
     /// Values, as `keys`.
     pub values: Vec<f64>,
-    /// Break-in's severe-power threshold [W] (0 for other effects).
-    pub threshold_w: f64,
 }
 
 impl EffectParams {
-    fn get(&self, key: &str) -> f64 {
+    /// A value by key (0 when absent).
+    pub fn get(&self, key: &str) -> f64 {
         self.keys.iter().position(|k| k == key).map_or(0.0, |i| self.values[i])
+    }
+
+    /// A state effect's coefficients, parsed for evaluation.
+    pub fn parsed(&self) -> state::Parsed {
+        state::Parsed::from_entries(self.effect, self.keys.iter().map(String::as_str).zip(self.values.iter().copied()))
     }
 }
 
@@ -287,16 +307,19 @@ pub struct Evaluator<'a> {
     pub t_ref_c: f64,
     /// Reference speed of the speed extension (LONGVL) [m/s].
     pub v_ref_mps: f64,
+    /// Severe sliding energy per [`state::BREAK_IN_THRESHOLDS_W`] [J].
     severe: Vec<Vec<f64>>,
+    /// Grip temperature through each of [`state::THERMAL_LAGS_S`] [°C].
+    lagged_temp: Vec<Vec<f64>>,
 }
 
-/// Per-point multipliers and input changes the extensions produce.
+/// A perturbation of one scaling factor's logarithm (for sensitivities).
 #[derive(Debug, Clone, Copy)]
-struct PointMods {
-    mu: f64,
-    k: f64,
-    c: f64,
-    drl_m: f64,
+pub struct Perturb {
+    /// Index into [`state::SCALING`].
+    pub factor: usize,
+    /// Added to the factor's logarithm.
+    pub log_step: f64,
 }
 
 impl<'a> Evaluator<'a> {
@@ -306,9 +329,17 @@ impl<'a> Evaluator<'a> {
             ds.points.iter().map(|&i| ds.series.temp_grip_c[i]).filter(|v| v.is_finite()).collect();
         temps.sort_by(f64::total_cmp);
         let t_ref_c = if temps.is_empty() { 25.0 } else { temps[temps.len() / 2] };
-        let severe = BREAK_IN_THRESHOLDS_W.iter().map(|&th| ds.series.severe_energy_j(th)).collect();
+        let severe = state::BREAK_IN_THRESHOLDS_W.iter().map(|&th| ds.series.severe_energy_j(th)).collect();
+        let s = &ds.series;
+        let lagged_temp =
+            state::THERMAL_LAGS_S.iter().map(|&tau| state::lagged(&s.t_s, &s.temp_grip_c, &s.new_tyre, tau)).collect();
         let v_ref_mps = if base.longvl_mps() > 0.0 { base.longvl_mps() } else { 16.6 };
-        Self { ds, base, t_ref_c, v_ref_mps, severe }
+        Self { ds, base, t_ref_c, v_ref_mps, severe, lagged_temp }
+    }
+
+    /// The references of the state variables.
+    pub fn references(&self) -> state::References {
+        state::References { t_ref_c: self.t_ref_c, v_ref_mps: self.v_ref_mps }
     }
 
     /// Relaxed slip angle and slip ratio series for the transient extension:
@@ -342,29 +373,95 @@ impl<'a> Evaluator<'a> {
         (a, k)
     }
 
+    /// The state series a state effect's choice reads: lagged temperature and severe energy
+    /// (from the precomputed grids, or computed when the choice is not on them).
+    fn choice_series(&self, c: &state::Choice) -> (std::borrow::Cow<'_, [f64]>, std::borrow::Cow<'_, [f64]>) {
+        use std::borrow::Cow;
+        let s = &self.ds.series;
+        let temp = match state::THERMAL_LAGS_S.iter().position(|&l| l == c.lag_s) {
+            Some(i) => Cow::Borrowed(self.lagged_temp[i].as_slice()),
+            None => Cow::Owned(state::lagged(&s.t_s, &s.temp_grip_c, &s.new_tyre, c.lag_s)),
+        };
+        let severe = match state::BREAK_IN_THRESHOLDS_W.iter().position(|&t| t == c.threshold_w) {
+            Some(i) => Cow::Borrowed(self.severe[i].as_slice()),
+            None => Cow::Owned(s.severe_energy_j(c.threshold_w)),
+        };
+        (temp, severe)
+    }
+
+    /// The state at series sample `i` as a state effect with choice series `(temp, severe)`
+    /// reads it.
+    pub fn state_at(&self, temp: &[f64], severe: &[f64], i: usize) -> state::StateAt {
+        let s = &self.ds.series;
+        state::StateAt {
+            temp_c: temp[i],
+            energy_mj: s.sliding_energy_j[i] * 1e-6,
+            severe_kj: severe[i] * 1e-3,
+            speed_mps: s.v_mps[i],
+            tyre: s.tyre[i],
+        }
+    }
+
+    /// Basis function values of `effect`'s `basis` at every point, for `choice`.
+    pub fn basis_at_points(&self, effect: Effect, basis: u8, choice: &state::Choice) -> Vec<f64> {
+        let (temp, severe) = self.choice_series(choice);
+        let refs = self.references();
+        self.ds
+            .points
+            .iter()
+            .map(|&i| state::basis(effect, basis, &self.state_at(&temp, &severe, i), choice, &refs))
+            .collect()
+    }
+
     /// Predictions [FX, FYW, MZW, DSTWOWHC] at the point ordinals `which` with `effects`.
     pub fn predict(&self, effects: &[EffectParams], which: &[usize]) -> Vec<[f64; 4]> {
+        self.predict_perturbed(effects, which, None)
+    }
+
+    /// As [`Self::predict`], with one scaling factor's logarithm moved by `perturb`.
+    pub fn predict_perturbed(
+        &self,
+        effects: &[EffectParams],
+        which: &[usize],
+        perturb: Option<Perturb>,
+    ) -> Vec<[f64; 4]> {
         let s = &self.ds.series;
         let mut params = self.base.clone();
         for e in effects.iter().filter(|e| e.effect.is_refit()) {
             for (k, v) in e.keys.iter().zip(&e.values) {
                 // Keys come from `param_specs`, which only lists keys the base has.
-                let _ = params.set(k, *v);
+                if params.set(k, *v).is_err() {
+                    continue;
+                }
             }
         }
         let relaxed = effects.iter().find(|e| e.effect == Effect::Transient).map(|e| self.relaxed(e));
+        let states: Vec<_> = effects
+            .iter()
+            .filter(|e| state::is_state_scaling(e.effect))
+            .map(|e| {
+                let p = e.parsed();
+                let series = self.choice_series(&p.choice);
+                (p, series)
+            })
+            .collect();
+        let refs = self.references();
         which
             .iter()
             .map(|&kpt| {
                 let i = self.ds.points[kpt];
-                let m = self.mods(effects, i);
+                let mut log_f = [0.0; 8];
+                let mut drl_m = 0.0;
+                for (p, (temp, severe)) in &states {
+                    p.accumulate(&self.state_at(temp, severe, i), &refs, &mut log_f, &mut drl_m);
+                }
+                if let Some(pt) = perturb
+                    && let Some(l) = log_f.get_mut(pt.factor)
+                {
+                    *l += pt.log_step;
+                }
                 let mut sc = params.scaling;
-                sc.lmux *= m.mu;
-                sc.lmuy *= m.mu;
-                sc.lkx *= m.k;
-                sc.lky *= m.k;
-                sc.lcx *= m.c;
-                sc.lcy *= m.c;
+                state::apply(&mut sc, &log_f);
                 let (alpha_deg, kappa) = match &relaxed {
                     Some((a, k)) => (a[i], k[i]),
                     None => (s.alpha_deg[i], s.kappa[i]),
@@ -380,43 +477,9 @@ impl<'a> Evaluator<'a> {
                     omega_radps: s.omega_radps[i].max(0.0),
                 };
                 let o = evaluate_scaled(&params, &sc, UseMode::M111, &input);
-                [o.fx_n, o.fy_n, o.mz_nm, o.rl_m + m.drl_m]
+                [o.fx_n, o.fy_n, o.mz_nm, o.rl_m + drl_m]
             })
             .collect()
-    }
-
-    fn mods(&self, effects: &[EffectParams], i: usize) -> PointMods {
-        let s = &self.ds.series;
-        let mut m = PointMods { mu: 1.0, k: 1.0, c: 1.0, drl_m: 0.0 };
-        for e in effects {
-            match e.effect {
-                Effect::Thermal => {
-                    let t = s.temp_grip_c[i];
-                    let x = if t.is_finite() { (t - self.t_ref_c) / 10.0 } else { 0.0 };
-                    m.mu *= (1.0 + e.values[0] + e.values[1] * x + e.values[2] * x * x).max(0.2);
-                    m.k *= (1.0 + e.values[3] + e.values[4] * x).max(0.2);
-                }
-                Effect::Wear => {
-                    let x = s.sliding_energy_j[i] * 1e-6;
-                    m.k *= (1.0 + e.values[0] * x).max(0.2);
-                    m.c *= (1.0 + e.values[1] * x).max(0.2);
-                    m.drl_m -= e.values[2] * x * 1e-3;
-                }
-                Effect::BreakIn => {
-                    let ti = BREAK_IN_THRESHOLDS_W.iter().position(|&t| t == e.threshold_w).unwrap_or(0);
-                    let ekj = self.severe[ti][i] * 1e-3;
-                    let e0 = 10f64.powf(e.values[1]);
-                    m.mu *= (1.0 - e.values[0] * (-ekj / e0).exp()).max(0.2);
-                }
-                Effect::Speed => {
-                    let x = (s.v_mps[i] - self.v_ref_mps) / self.v_ref_mps;
-                    m.mu *= (1.0 + e.values[0] * x).max(0.2);
-                    m.k *= (1.0 + e.values[1] * x).max(0.2);
-                }
-                Effect::Transient | Effect::Pressure | Effect::Camber | Effect::Load | Effect::Offset => {}
-            }
-        }
-        m
     }
 }
 
@@ -470,6 +533,7 @@ mod tests {
                 s.t_s.push(t);
                 s.sweep.push(sw);
                 s.new_tyre.push(i == 0);
+                s.tyre.push(0);
                 s.alpha_deg.push(a);
                 s.kappa.push(0.0);
                 s.fz_n.push(fz);
@@ -498,28 +562,8 @@ mod tests {
         ds
     }
 
-    /// Makes the "measurements" from `truth` with `base_truth`, then fits `effect` on `base_fit`.
-    fn recover(
-        effect: Effect,
-        truth: &[f64],
-        threshold_w: f64,
-        base_truth: &TyreParams,
-        base_fit: &TyreParams,
-    ) -> Vec<f64> {
-        let mut ds = synthetic();
-        let specs = param_specs(effect, &ds, base_fit);
-        let truth_p = EffectParams {
-            effect,
-            keys: specs.iter().map(|p| p.key.clone()).collect(),
-            values: truth.to_vec(),
-            threshold_w,
-        };
-        let all: Vec<usize> = (0..ds.len()).collect();
-        let pred = {
-            let ev = Evaluator::new(&ds, base_truth);
-            let fx: Vec<EffectParams> = if effect.is_refit() { vec![] } else { vec![truth_p.clone()] };
-            ev.predict(&fx, &all)
-        };
+    /// Writes `pred` into the dataset's measured channels.
+    fn set_measured(ds: &mut Dataset, pred: &[[f64; 4]]) {
         for (k, p) in pred.iter().enumerate() {
             let i = ds.points[k];
             ds.series.fx_n[i] = p[0];
@@ -527,21 +571,35 @@ mod tests {
             ds.series.mz_nm[i] = p[2];
             ds.series.rl_m[i] = p[3];
         }
-        let ev = Evaluator::new(&ds, base_fit);
+    }
+
+    /// Makes the "measurements" with a state effect of the given terms and choice, then fits its
+    /// terms back through the sensitivities; returns the fitted values in `truth`'s order.
+    fn recover_state(effect: Effect, choice: state::Choice, truth: &[(state::Term, f64)]) -> Vec<f64> {
+        let b = base();
+        let mut ds = synthetic();
+        let entries = choice.entries(effect);
+        let truth_p = EffectParams {
+            effect,
+            keys: entries
+                .iter()
+                .map(|e| e.0.clone())
+                .chain(truth.iter().map(|(t, _)| state::term_key(effect, *t)))
+                .collect(),
+            values: entries.iter().map(|e| e.1).chain(truth.iter().map(|(_, v)| *v)).collect(),
+        };
+        let all: Vec<usize> = (0..ds.len()).collect();
+        let pred = Evaluator::new(&ds, &b).predict(std::slice::from_ref(&truth_p), &all);
+        set_measured(&mut ds, &pred);
+        let ev = Evaluator::new(&ds, &b);
         let meas = measured(&ev);
-        let (fitted, cost) = fit_effects(
-            &ev,
-            &[FitSpec { effect, params: specs }],
-            &all,
-            &meas,
-            [10.0, 10.0, 1.0, 1e-4],
-            FitOptions { max_iterations: 60 },
-        );
-        assert!(cost < 1.0, "{}: cost {cost} after the fit", effect.name());
-        if effect == Effect::BreakIn {
-            assert_eq!(fitted[0].threshold_w, threshold_w);
-        }
-        fitted[0].values.clone()
+        let terms: Vec<state::Term> = truth.iter().map(|(t, _)| *t).collect();
+        let design = crate::linfit::with_candidate(&ev, &[], &[], effect, choice, terms);
+        let lin0 = crate::linfit::linearize(&ev, &[]);
+        let sigma = [10.0, 10.0, 1.0, 1e-4];
+        let fitted = crate::linfit::fit_all(&ev, design, &lin0, &[], &|k| meas[k], &sigma);
+        let got = &fitted.effects[0];
+        truth.iter().map(|(t, _)| got.get(&state::term_key(effect, *t))).collect()
     }
 
     fn close(got: &[f64], want: &[f64], tol: f64) {
@@ -550,39 +608,82 @@ mod tests {
         }
     }
 
-    #[test]
-    fn thermal_extension_recovers_its_coefficients() {
-        let b = base();
-        let truth = [-0.01, -0.02, -0.015, 0.02, -0.03];
-        close(&recover(Effect::Thermal, &truth, 0.0, &b, &b), &truth, 0.05);
+    use crate::state::{Factor, Term};
+    fn t(factor: Factor, basis: u8) -> Term {
+        Term { factor, basis }
     }
 
     #[test]
-    fn wear_extension_recovers_its_coefficients() {
-        let b = base();
-        let truth = [0.08, 0.05, 2.5];
-        close(&recover(Effect::Wear, &truth, 0.0, &b, &b), &truth, 0.05);
+    fn thermal_extension_recovers_grip_stiffness_and_trail_terms() {
+        // A quarter of the grip at the extremes: the Gauss–Newton step makes it exact.
+        let truth = [
+            (t(Factor::MuY, 0), -0.01),
+            (t(Factor::MuY, 1), -0.05),
+            (t(Factor::MuY, 2), -0.04),
+            (t(Factor::Ky, 1), -0.03),
+            (t(Factor::Trail, 1), 0.05),
+        ];
+        let want: Vec<f64> = truth.iter().map(|x| x.1).collect();
+        let choice = state::Choice { lag_s: 30.0, ..state::Choice::default() };
+        close(&recover_state(Effect::Thermal, choice, &truth), &want, 0.05);
     }
 
     #[test]
-    fn break_in_extension_recovers_deficit_energy_and_threshold() {
-        let b = base();
-        let truth = [0.12, 2.0];
-        close(&recover(Effect::BreakIn, &truth, 5_000.0, &b, &b), &truth, 0.05);
+    fn wear_extension_recovers_grip_stiffness_and_radius() {
+        let truth = [(t(Factor::MuY, 0), -0.08), (t(Factor::Ky, 0), 0.1), (t(Factor::Radius, 0), -2.5)];
+        let want: Vec<f64> = truth.iter().map(|x| x.1).collect();
+        close(&recover_state(Effect::Wear, state::Choice::default(), &truth), &want, 0.05);
+    }
+
+    #[test]
+    fn break_in_extension_recovers_its_deficit() {
+        let choice = state::Choice { energy_kj: 100.0, threshold_w: 5_000.0, lag_s: 0.0 };
+        let truth = [(t(Factor::MuY, 0), -0.12), (t(Factor::Cy, 0), 0.05)];
+        let want: Vec<f64> = truth.iter().map(|x| x.1).collect();
+        close(&recover_state(Effect::BreakIn, choice, &truth), &want, 0.05);
+    }
+
+    #[test]
+    fn speed_extension_recovers_its_coefficients() {
+        let truth = [(t(Factor::MuY, 0), -0.05), (t(Factor::Ky, 0), 0.04)];
+        let want: Vec<f64> = truth.iter().map(|x| x.1).collect();
+        close(&recover_state(Effect::Speed, state::Choice::default(), &truth), &want, 0.05);
+    }
+
+    /// Makes the "measurements" from `truth` with `base_truth`, then fits `effect` (transient
+    /// or a refit) on `base_fit` by Levenberg–Marquardt.
+    fn recover(effect: Effect, truth: &[f64], base_truth: &TyreParams, base_fit: &TyreParams) -> Vec<f64> {
+        let mut ds = synthetic();
+        let specs = param_specs(effect, &ds, base_fit);
+        let truth_p =
+            EffectParams { effect, keys: specs.iter().map(|p| p.key.clone()).collect(), values: truth.to_vec() };
+        let all: Vec<usize> = (0..ds.len()).collect();
+        let pred = {
+            let ev = Evaluator::new(&ds, base_truth);
+            let fx: Vec<EffectParams> = if effect.is_refit() { vec![] } else { vec![truth_p.clone()] };
+            ev.predict(&fx, &all)
+        };
+        set_measured(&mut ds, &pred);
+        let ev = Evaluator::new(&ds, base_fit);
+        let meas = measured(&ev);
+        let (fitted, cost) = fit_effects(
+            &ev,
+            &[FitSpec { effect, params: specs }],
+            &[],
+            &all,
+            &meas,
+            [10.0, 10.0, 1.0, 1e-4],
+            FitOptions { max_iterations: 60 },
+        );
+        assert!(cost < 1.0, "{}: cost {cost} after the fit", effect.name());
+        fitted[0].values.clone()
     }
 
     #[test]
     fn transient_extension_recovers_relaxation_length() {
         let b = base();
         let truth = [0.6, 2.5];
-        close(&recover(Effect::Transient, &truth, 0.0, &b, &b), &truth, 0.05);
-    }
-
-    #[test]
-    fn speed_extension_recovers_its_coefficients() {
-        let b = base();
-        let truth = [-0.05, 0.04];
-        close(&recover(Effect::Speed, &truth, 0.0, &b, &b), &truth, 0.05);
+        close(&recover(Effect::Transient, &truth, &b, &b), &truth, 0.05);
     }
 
     #[test]
@@ -594,7 +695,7 @@ mod tests {
         for k in ["PPY1", "PPY2", "PPY3", "PPY4", "PPZ1", "PPZ2"] {
             zeroed.set(k, 0.0).expect("key");
         }
-        let got = recover(Effect::Pressure, &[], 0.0, &truth_model, &zeroed);
+        let got = recover(Effect::Pressure, &[], &truth_model, &zeroed);
         // PFZ1, PPY1, PPY2, PPY3, PPY4, PPZ1: the cornering-stiffness and trail terms are
         // well determined by ±10° sweeps at three pressures.
         let want_ppy1 = truth_model.get("PPY1").expect("PPY1");

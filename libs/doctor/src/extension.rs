@@ -4,23 +4,25 @@
 //! ```text
 //! [TYRERIG_EXTENSIONS]
 //! $ Added by `tyrerig doctor` (docs/doctor.md). MF-Tyre 6.1 readers ignore this section.
-//! FORMAT_VERSION            = 1
+//! FORMAT_VERSION            = 2
 //! EFFECTS                   = 'thermal,wear'
-//! THERMAL_TREF_C            = 52.3    $ x = (T_grip − TREF)/10 K
-//! THERMAL_MU0 … THERMAL_MU2         $ λμx,y ×= 1 + MU0 + MU1·x + MU2·x²
-//! THERMAL_K0, THERMAL_K1            $ λKx,y ×= 1 + K0 + K1·x
-//! WEAR_K_PER_MJ, WEAR_C_PER_MJ      $ λK ×= 1 + K·E, λC ×= 1 + C·E, E = sliding energy [MJ]
-//! WEAR_RL_MM_PER_MJ                 $ Rl −= RL·E mm
-//! BREAKIN_DEFICIT, BREAKIN_LOG10_ENERGY_KJ, BREAKIN_THRESHOLD_KW
-//!                                   $ λμ ×= 1 − D·exp(−E_sev/10^L kJ), E_sev above THRESHOLD
+//! THERMAL_TREF_C            = 52.3    $ x = (T_grip,lagged − TREF)/10 K
+//! THERMAL_LAG_S             = 30      $ lag of the grip temperature
+//! THERMAL_MUY_0, _1, _2 …           $ λμy ×= exp(c0 + c1·x + c2·x²); likewise MUX, KX, KY (c0, c1),
+//!                                   $ TRAIL, MRES (c1), RL_MM (Rl += c1·x mm)
+//! WEAR_MUY, WEAR_KY, WEAR_CY, …     $ λ ×= exp(c·E), E = sliding energy [MJ]; WEAR_RL_MM: Rl += c·E mm
+//! BREAKIN_ENERGY_KJ, BREAKIN_THRESHOLD_KW, BREAKIN_MUY, …
+//!                                   $ λ ×= exp(c·r), r = exp(−E_sev/E₀), E_sev above the threshold
+//! SPEED_VREF_MPS, SPEED_MUY, …      $ λ ×= exp(c·(V − VREF)/VREF)
+//! SPECIMEN_MUY_T1, …                $ λ ×= exp(c) on the test's tyre 1 (2, …)
 //! TRANSIENT_SIGMA_Y0_M, TRANSIENT_ALPHA_HALF_DEG (…_X0_M, …_KAPPA_HALF)
 //!                                   $ dα'/ds = (α − α')/σ, σ = σ0/(1 + (α'/α½)²)
-//! SPEED_VREF_MPS, SPEED_MU1, SPEED_K1  $ λμ ×= 1 + MU1·(V − VREF)/VREF, λK likewise
 //! REFIT_PRESSURE            = 'PPY1,PPY3,…' $ refitted coefficients (already in their sections)
 //! ```
 
 use crate::DoctorError;
 use crate::effects::{Effect, EffectParams};
+use crate::state;
 use mftyre::{ExtraSection, ScalingFactors, TirValue, TyreParams};
 
 /// Name of the extension section.
@@ -34,7 +36,7 @@ pub fn extended_params(base: &TyreParams, effects: &[EffectParams], t_ref_c: f64
     sec.lines
         .push("$ Added by `tyrerig doctor` (see docs/doctor.md). MF-Tyre 6.1 readers ignore this section;".to_owned());
     sec.lines.push("$ the terms need state inputs (grip temperature, sliding energy, travelled distance).".to_owned());
-    sec.set("FORMAT_VERSION", TirValue::Number(1.0));
+    sec.set("FORMAT_VERSION", TirValue::Number(2.0));
     let names: Vec<&str> = effects.iter().map(|e| e.effect.name()).collect();
     sec.set("EFFECTS", TirValue::Text(names.join(",")));
     for e in effects {
@@ -48,7 +50,6 @@ pub fn extended_params(base: &TyreParams, effects: &[EffectParams], t_ref_c: f64
         match e.effect {
             Effect::Thermal => sec.set("THERMAL_TREF_C", TirValue::Number(t_ref_c)),
             Effect::Speed => sec.set("SPEED_VREF_MPS", TirValue::Number(v_ref_mps)),
-            Effect::BreakIn => sec.set("BREAKIN_THRESHOLD_KW", TirValue::Number(e.threshold_w * 1e-3)),
             _ => {}
         }
         for (k, v) in e.keys.iter().zip(&e.values) {
@@ -62,14 +63,16 @@ pub fn extended_params(base: &TyreParams, effects: &[EffectParams], t_ref_c: f64
 /// The state an extended model needs beyond MF-Tyre 6.1's inputs.
 #[derive(Debug, Clone, Copy, Default)]
 pub struct ExtState {
-    /// Grip temperature [°C].
+    /// Grip temperature through the first-order lag `THERMAL_LAG_S` [°C].
     pub temp_grip_c: f64,
     /// Sliding energy on the tyre so far [MJ].
     pub sliding_energy_mj: f64,
-    /// Sliding energy above the break-in threshold so far [kJ].
+    /// Sliding energy above `BREAKIN_THRESHOLD_KW` so far [kJ].
     pub severe_energy_kj: f64,
     /// Belt speed [m/s].
     pub speed_mps: f64,
+    /// Ordinal of the tyre in the test the model was diagnosed on (0: the first).
+    pub tyre: usize,
 }
 
 /// The extension terms of an extended `.tir`, ready to apply.
@@ -110,42 +113,23 @@ impl Extensions {
     /// The scaling factors at `state` (the transient terms act on the slips instead, see
     /// [`crate::effects::Evaluator::relaxed`]) and the loaded-radius change [m].
     pub fn scaling(&self, base: &ScalingFactors, st: &ExtState) -> (ScalingFactors, f64) {
-        let (mut mu, mut k, mut c, mut drl) = (1.0, 1.0, 1.0, 0.0);
-        for e in &self.effects {
-            match e {
-                Effect::Thermal => {
-                    let x = (st.temp_grip_c - self.get("THERMAL_TREF_C")) / 10.0;
-                    mu *=
-                        (1.0 + self.get("THERMAL_MU0") + self.get("THERMAL_MU1") * x + self.get("THERMAL_MU2") * x * x)
-                            .max(0.2);
-                    k *= (1.0 + self.get("THERMAL_K0") + self.get("THERMAL_K1") * x).max(0.2);
-                }
-                Effect::Wear => {
-                    let x = st.sliding_energy_mj;
-                    k *= (1.0 + self.get("WEAR_K_PER_MJ") * x).max(0.2);
-                    c *= (1.0 + self.get("WEAR_C_PER_MJ") * x).max(0.2);
-                    drl -= self.get("WEAR_RL_MM_PER_MJ") * x * 1e-3;
-                }
-                Effect::BreakIn => {
-                    let e0 = 10f64.powf(self.get("BREAKIN_LOG10_ENERGY_KJ"));
-                    mu *= (1.0 - self.get("BREAKIN_DEFICIT") * (-st.severe_energy_kj / e0).exp()).max(0.2);
-                }
-                Effect::Speed => {
-                    let vr = self.get("SPEED_VREF_MPS").max(1.0);
-                    let x = (st.speed_mps - vr) / vr;
-                    mu *= (1.0 + self.get("SPEED_MU1") * x).max(0.2);
-                    k *= (1.0 + self.get("SPEED_K1") * x).max(0.2);
-                }
-                _ => {}
-            }
+        let refs =
+            state::References { t_ref_c: self.get("THERMAL_TREF_C"), v_ref_mps: self.get("SPEED_VREF_MPS").max(1.0) };
+        let at = state::StateAt {
+            temp_c: st.temp_grip_c,
+            energy_mj: st.sliding_energy_mj,
+            severe_kj: st.severe_energy_kj,
+            speed_mps: st.speed_mps,
+            tyre: st.tyre,
+        };
+        let mut log_f = [0.0; 8];
+        let mut drl_m = 0.0;
+        for &e in self.effects.iter().filter(|e| state::is_state_scaling(**e)) {
+            let parsed = state::Parsed::from_entries(e, self.values.iter().map(|(k, v)| (k.as_str(), *v)));
+            parsed.accumulate(&at, &refs, &mut log_f, &mut drl_m);
         }
         let mut s = *base;
-        s.lmux *= mu;
-        s.lmuy *= mu;
-        s.lkx *= k;
-        s.lky *= k;
-        s.lcx *= c;
-        s.lcy *= c;
-        (s, drl)
+        state::apply(&mut s, &log_f);
+        (s, drl_m)
     }
 }

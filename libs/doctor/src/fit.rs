@@ -1,7 +1,7 @@
 //! Residuals, the noise floor, fitting extensions (bounded Levenberg–Marquardt) and
 //! cross-validated scoring on held-out sweeps.
 
-use crate::effects::{BREAK_IN_THRESHOLDS_W, CH_FX, CH_FY, CH_MZ, CH_RL, Effect, EffectParams, Evaluator, ParamSpec};
+use crate::effects::{CH_FX, CH_FY, CH_MZ, CH_RL, Effect, EffectParams, Evaluator, ParamSpec};
 use lsq::{Options, Problem, solve};
 use nalgebra::DVector;
 
@@ -80,7 +80,8 @@ pub struct FitSpec {
 struct FitProblem<'e, 'a> {
     ev: &'e Evaluator<'a>,
     specs: &'e [FitSpec],
-    thresholds: Vec<f64>,
+    /// Effects held at their values (the state effects fitted through their sensitivities).
+    fixed: &'e [EffectParams],
     train: &'e [usize],
     meas: &'e [[f64; 4]],
     sigma: [f64; 4],
@@ -91,14 +92,12 @@ impl FitProblem<'_, '_> {
         let mut at = 0;
         self.specs
             .iter()
-            .zip(&self.thresholds)
-            .map(|(s, &th)| {
+            .map(|s| {
                 let n = s.params.len();
                 let e = EffectParams {
                     effect: s.effect,
                     keys: s.params.iter().map(|p| p.key.clone()).collect(),
                     values: p.as_slice()[at..at + n].to_vec(),
-                    threshold_w: th,
                 };
                 at += n;
                 e
@@ -113,7 +112,8 @@ impl Problem for FitProblem<'_, '_> {
     }
 
     fn residuals(&self, p: &DVector<f64>, r: &mut DVector<f64>) {
-        let effects = self.unpack(p);
+        let mut effects = self.unpack(p);
+        effects.extend(self.fixed.iter().cloned());
         let pred = self.ev.predict(&effects, self.train);
         for (j, (&k, pr)) in self.train.iter().zip(&pred).enumerate() {
             for ch in 0..4 {
@@ -137,39 +137,31 @@ impl Default for FitOptions {
     }
 }
 
-/// Fits the parameters of `specs` jointly on the points `train` (break-in's threshold by
-/// trying each of [`BREAK_IN_THRESHOLDS_W`]). Returns the fitted effects and the cost ½χ².
+/// Fits the parameters of `specs` jointly on the points `train`, with the effects `fixed` held
+/// at their values. Returns the fitted effects (of `specs`) and the cost ½χ².
 pub fn fit_effects(
     ev: &Evaluator<'_>,
     specs: &[FitSpec],
+    fixed: &[EffectParams],
     train: &[usize],
     meas: &[[f64; 4]],
     sigma: [f64; 4],
     opt: FitOptions,
 ) -> (Vec<EffectParams>, f64) {
-    let has_break_in = specs.iter().any(|s| s.effect == Effect::BreakIn);
-    let grid: Vec<f64> = if has_break_in { BREAK_IN_THRESHOLDS_W.to_vec() } else { vec![0.0] };
     let p0 = DVector::from_iterator(
         specs.iter().map(|s| s.params.len()).sum(),
         specs.iter().flat_map(|s| s.params.iter().map(|p| p.init)),
     );
     let lo = DVector::from_iterator(p0.len(), specs.iter().flat_map(|s| s.params.iter().map(|p| p.lower)));
     let up = DVector::from_iterator(p0.len(), specs.iter().flat_map(|s| s.params.iter().map(|p| p.upper)));
-    let mut best: Option<(Vec<EffectParams>, f64)> = None;
-    for th in grid {
-        let thresholds = specs.iter().map(|s| if s.effect == Effect::BreakIn { th } else { 0.0 }).collect();
-        let prob = FitProblem { ev, specs, thresholds, train, meas, sigma };
-        let options = Options::default().max_iterations(opt.max_iterations).bounds(lo.clone(), up.clone());
-        let (params, cost) = match solve(&prob, p0.clone(), &options) {
-            Ok(rep) => (rep.params, rep.cost),
-            // Only invalid input (empty data) errors; keep the start, which is "no effect".
-            Err(_) => (p0.clone(), f64::INFINITY),
-        };
-        if best.as_ref().is_none_or(|b| cost < b.1) {
-            best = Some((prob.unpack(&params), cost));
-        }
-    }
-    best.unwrap_or_default()
+    let prob = FitProblem { ev, specs, fixed, train, meas, sigma };
+    let options = Options::default().max_iterations(opt.max_iterations).bounds(lo, up);
+    let (params, cost) = match solve(&prob, p0.clone(), &options) {
+        Ok(rep) => (rep.params, rep.cost),
+        // Only invalid input (empty data, no parameters) errors; keep the start, "no change".
+        Err(_) => (p0, f64::INFINITY),
+    };
+    (prob.unpack(&params), cost)
 }
 
 /// Held-out folds: the sweeps, in a fixed pseudo-random order, dealt round-robin into `k`
@@ -214,32 +206,37 @@ fn sweep_folds(n: usize, k: usize) -> Vec<usize> {
 pub fn cross_validate(
     ev: &Evaluator<'_>,
     specs: &[FitSpec],
+    fixed: &[EffectParams],
     folds: &[Vec<usize>],
     meas: &[[f64; 4]],
     sigma: [f64; 4],
     opt: FitOptions,
 ) -> Vec<[f64; 4]> {
-    cross_validate_with(ev, specs, folds, meas, sigma, opt, None)
+    cross_validate_with(ev, specs, fixed, folds, meas, sigma, opt, None)
 }
 
 /// Cross-validated predictions against the form error ([`crate::form`]): for each held-out
 /// fold the effects are fitted to the training points' measurements less their correction
 /// (from the other training sweeps), and the held-out points are predicted with theirs added.
+#[allow(clippy::too_many_arguments)]
 pub fn cross_validate_corrected(
     ev: &Evaluator<'_>,
     specs: &[FitSpec],
+    fixed: &[EffectParams],
     folds: &[Vec<usize>],
     meas: &[[f64; 4]],
     sigma: [f64; 4],
     opt: FitOptions,
     correction: &[crate::form::FoldCorrection],
 ) -> Vec<[f64; 4]> {
-    cross_validate_with(ev, specs, folds, meas, sigma, opt, Some(correction))
+    cross_validate_with(ev, specs, fixed, folds, meas, sigma, opt, Some(correction))
 }
 
+#[allow(clippy::too_many_arguments)]
 fn cross_validate_with(
     ev: &Evaluator<'_>,
     specs: &[FitSpec],
+    fixed: &[EffectParams],
     folds: &[Vec<usize>],
     meas: &[[f64; 4]],
     sigma: [f64; 4],
@@ -261,7 +258,8 @@ fn cross_validate_with(
             Some(c) => meas.iter().zip(c).map(|(m, c)| std::array::from_fn(|ch| m[ch] - c[ch])).collect(),
             None => meas.to_vec(),
         };
-        let (fitted, _) = fit_effects(ev, specs, &train, &target, sigma, opt);
+        let (mut fitted, _) = fit_effects(ev, specs, fixed, &train, &target, sigma, opt);
+        fitted.extend(fixed.iter().cloned());
         for (k, p) in test.iter().zip(ev.predict(&fitted, test)) {
             out[*k] = match corr {
                 Some(c) => std::array::from_fn(|ch| p[ch] + c[*k][ch]),

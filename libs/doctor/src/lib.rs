@@ -37,11 +37,13 @@ pub mod extension;
 pub mod fit;
 pub mod flash;
 pub mod form;
+pub mod linfit;
 pub mod report;
+pub mod state;
 
 pub use data::{DataOptions, Dataset, RawLog};
 pub use diagnose::{Diagnosis, DoctorConfig, NamedEffect, diagnose};
-pub use effects::Effect;
+pub use effects::{Effect, Family};
 pub use extension::{ExtState, Extensions};
 
 /// What can go wrong, naming the file, channel or sweep.

@@ -3,7 +3,7 @@
 use crate::DoctorError;
 use crate::data::Dataset;
 use crate::diagnose::{CandidateScore, Diagnosis};
-use crate::effects::{CH_FX, CH_FY, CH_MZ, CH_RL, CHANNELS, Effect, EffectParams};
+use crate::effects::{CH_FX, CH_FY, CH_MZ, CH_RL, CHANNELS, EffectParams};
 use crate::extension::extended_params;
 use mftyre::TyreParams;
 use plotters::prelude::*;
@@ -63,6 +63,9 @@ fn score_json(c: &CandidateScore) -> Value {
         "folds": c.folds,
         "delta_chi2_by_channel": CHANNELS.iter().zip(c.delta_chi2_by_channel).map(|(k, v)| (k.to_string(), json!(v))).collect::<serde_json::Map<_, _>>(),
         "significant": c.significant,
+        "p_value": c.p_value,
+        "family": c.family,
+        "form_corrected": c.form_corrected,
     })
 }
 
@@ -84,7 +87,9 @@ pub fn to_json(
         "points": dx.points,
         "sweeps": dx.sweeps,
         "noise_floor": per_ch(dx.rms.noise),
-        "named_effects": dx.named.iter().map(|n| n.effect.name()).collect::<Vec<_>>(),
+        "named_effects": dx.state_effects().map(|n| n.effect.name()).collect::<Vec<_>>(),
+        "form_errors": dx.form_errors().map(|n| n.effect.name()).collect::<Vec<_>>(),
+        "not_identifiable": dx.not_identifiable,
         "effects": dx.named.iter().map(|n| json!({
             "effect": n.effect.name(),
             "evidence": n.evidence,
@@ -99,7 +104,9 @@ pub fn to_json(
             "form_corrected": n.form_corrected,
             "correlation": n.correlation,
             "parameters": n.params.keys.iter().zip(&n.params.values).map(|(k, v)| (k.clone(), json!(v))).collect::<serde_json::Map<_, _>>(),
-            "break_in_threshold_w": if n.effect == Effect::BreakIn { json!(n.params.threshold_w) } else { Value::Null },
+            "family": n.family,
+            "p_value": n.p_value,
+            "channels_heldout": CHANNELS.iter().zip(n.channels_heldout).map(|(k, [b, a])| (k.to_string(), json!({"before": b, "after": a}))).collect::<serde_json::Map<_, _>>(),
         })).collect::<Vec<_>>(),
         "rounds": dx.rounds.iter().map(|r| r.iter().map(score_json).collect::<Vec<_>>()).collect::<Vec<_>>(),
         "regions": dx.regions.iter().map(|b| json!({
@@ -184,28 +191,50 @@ pub fn markdown(
     let _ = writeln!(m, "- Base model: `{base_name}`");
     let _ = writeln!(m, "- Data: {} points in {} sweeps; wall time {:.1} s\n", dx.points, dx.sweeps, wall_time_s);
     let _ = writeln!(m, "## Verdict\n");
-    if dx.named.is_empty() {
-        let _ = writeln!(m, "**No effect named.** {}\n", dx.stop_reason);
+    let line = |m: &mut String, i: usize, n: &crate::diagnose::NamedEffect| {
+        let ch = ch_index(&n.channel);
+        let ru = n.runner_up.map_or("none".to_owned(), |(e, v)| format!("{} ({:.3})", e.name(), v));
+        let _ = writeln!(
+            m,
+            "{}. **{}** — evidence {:.3}, bootstrap p {:.4} (runner-up {ru}); main channel {}; held-out RMS in its region {} → {} ({:.0} % less).",
+            i + 1,
+            n.effect.name(),
+            n.evidence,
+            n.p_value,
+            n.channel,
+            fmt_rms(n.rms_before_heldout, ch),
+            fmt_rms(n.rms_after_heldout, ch),
+            100.0 * (1.0 - n.rms_after_heldout / n.rms_before_heldout.max(1e-30))
+        );
+    };
+    if dx.state_effects().next().is_none() {
+        let _ = writeln!(m, "**No missing effect of the tyre's state named.**\n");
     } else {
-        for (i, n) in dx.named.iter().enumerate() {
-            let ch = ch_index(&n.channel);
-            let ru = n.runner_up.map_or("none".to_owned(), |(e, v)| format!("{} ({:.3})", e.name(), v));
-            let _ = writeln!(
-                m,
-                "{}. **{}** — evidence {:.3} (runner-up {ru}); main channel {}; held-out RMS in its region {} → {} ({:.0} % less).",
-                i + 1,
-                n.effect.name(),
-                n.evidence,
-                n.channel,
-                fmt_rms(n.rms_before_heldout, ch),
-                fmt_rms(n.rms_after_heldout, ch),
-                100.0 * (1.0 - n.rms_after_heldout / n.rms_before_heldout.max(1e-30))
-            );
+        let _ = writeln!(m, "Missing effects of the tyre's state, in the order added:\n");
+        for (i, n) in dx.state_effects().enumerate() {
+            line(&mut m, i, n);
         }
-        let _ = writeln!(m, "\nSearch stopped: {}\n", dx.stop_reason);
-        if let Some(f) = model_file {
-            let _ = writeln!(m, "Extended model: `{f}` (section `[TYRERIG_EXTENSIONS]`, see docs/doctor.md).\n");
+        let _ = writeln!(m);
+    }
+    if dx.form_errors().next().is_some() {
+        let _ = writeln!(
+            m,
+            "The model's form error (operating-point misfits MF-Tyre 6.1's own coefficients mend; not effects of the tyre's state):\n"
+        );
+        for (i, n) in dx.form_errors().enumerate() {
+            line(&mut m, i, n);
         }
+        let _ = writeln!(m);
+    }
+    for ni in &dx.not_identifiable {
+        let _ = writeln!(m, "- {ni}.");
+    }
+    if !dx.not_identifiable.is_empty() {
+        let _ = writeln!(m);
+    }
+    let _ = writeln!(m, "Search stopped: {}\n", dx.stop_reason);
+    if let Some(f) = model_file {
+        let _ = writeln!(m, "Extended model: `{f}` (section `[TYRERIG_EXTENSIONS]`, see docs/doctor.md).\n");
     }
     for nd in &dx.not_diagnosed {
         let _ = writeln!(m, "- {nd}");
@@ -265,12 +294,15 @@ pub fn markdown(
     let _ = writeln!(m, "## 3. Name: candidate effects, scored on held-out sweeps\n");
     let _ = writeln!(
         m,
-        "Evidence = (held-out χ² reduction − k·ln N) / held-out χ² of the model so far; named when ≥ the threshold and better on all held-out folds but at most one.\n"
+        "Evidence = (held-out χ² reduction − k·ln N) / held-out χ² of the model so far; named when ≥ the threshold, better on all held-out folds but at most one, and its gain is consistent over sweeps (block bootstrap p ≤ the false-naming rate shared among the round's candidates); then only if it cuts the held-out residual in its own region and makes no channel worse.\n"
     );
     for (r, round) in dx.rounds.iter().enumerate() {
         let _ = writeln!(m, "### Round {}\n", r + 1);
-        let _ = writeln!(m, "| candidate | params | evidence | folds improved | held-out χ² before → after | note |");
-        let _ = writeln!(m, "|---|---|---|---|---|---|");
+        let _ = writeln!(
+            m,
+            "| candidate | family | params | evidence | p | folds improved | held-out χ² before → after | note |"
+        );
+        let _ = writeln!(m, "|---|---|---|---|---|---|---|---|");
         let mut sorted: Vec<&CandidateScore> = round.iter().collect();
         sorted.sort_by(|a, b| b.evidence.total_cmp(&a.evidence));
         for c in sorted {
@@ -283,12 +315,17 @@ pub fn markdown(
             } else {
                 String::new()
             };
+            let fam = match c.family {
+                crate::effects::Family::State => "state",
+                crate::effects::Family::FormError => "form error",
+            };
             let _ = writeln!(
                 m,
-                "| {} | {} | {:.4} | {}/{} | {:.0} → {:.0} | {note} |",
+                "| {} | {fam} | {} | {:.4} | {:.4} | {}/{} | {:.0} → {:.0} | {note} |",
                 c.effect.name(),
                 c.n_params,
                 c.evidence,
+                c.p_value,
                 c.folds_improved,
                 c.folds,
                 c.chi2_before_heldout,
@@ -323,12 +360,17 @@ pub fn markdown(
                 100.0 * (a / b.max(1e-30) - 1.0)
             );
         }
+        let _ = writeln!(m, "\nEvery channel on held-out sweeps, all points (adding never harms):\n");
+        let _ = writeln!(m, "| channel | before | after |");
+        let _ = writeln!(m, "|---|---|---|");
+        for (c, [b, a]) in n.channels_heldout.iter().enumerate() {
+            if *b > 0.0 {
+                let _ = writeln!(m, "| {} | {} | {} |", CHANNELS[c], fmt_rms(*b, c), fmt_rms(*a, c));
+            }
+        }
         let _ = writeln!(m, "\nParameters:\n");
         for (k, v) in n.params.keys.iter().zip(&n.params.values) {
             let _ = writeln!(m, "- `{k}` = {v:.6}");
-        }
-        if n.effect == Effect::BreakIn {
-            let _ = writeln!(m, "- `BREAKIN_THRESHOLD_KW` = {}", n.params.threshold_w * 1e-3);
         }
         for p in plots {
             let name = p.file_name().map(|s| s.to_string_lossy().into_owned()).unwrap_or_default();

@@ -39,7 +39,10 @@ fn run_case(name: &str, c: &Case) -> (Diagnosis, TyreParams, Dataset) {
         .iter()
         .map(|v| v.as_str().unwrap_or("").to_owned())
         .collect();
-    assert_eq!(named_json, dx.named.iter().map(|n| n.effect.name().to_owned()).collect::<Vec<_>>());
+    assert_eq!(named_json, dx.state_effects().map(|n| n.effect.name().to_owned()).collect::<Vec<_>>());
+    let form_json: Vec<&str> =
+        json["form_errors"].as_array().expect("form_errors").iter().map(|v| v.as_str().unwrap_or("")).collect();
+    assert_eq!(form_json, dx.form_errors().map(|n| n.effect.name()).collect::<Vec<_>>());
     let md = std::fs::read_to_string(&w.markdown).expect("md");
     assert!(md.contains("## Verdict"));
     if let Some(m) = &w.model {
@@ -152,7 +155,7 @@ fn transient_relaxation_is_named() {
 }
 
 #[test]
-fn pressure_is_named_for_a_model_without_pressure_terms() {
+fn pressure_is_reported_as_form_error_for_a_model_without_pressure_terms() {
     let (dx, _, _) = run_case(
         "pressure",
         &Case {
@@ -163,6 +166,9 @@ fn pressure_is_named_for_a_model_without_pressure_terms() {
         },
     );
     assert_first(&dx, Effect::Pressure);
+    // An operating-point misfit: the model's form error, not a missing effect of the tyre.
+    assert_eq!(dx.named[0].family, doctor::Family::FormError);
+    assert!(dx.state_effects().next().is_none(), "a state effect named for a pressure misfit");
 }
 
 #[test]

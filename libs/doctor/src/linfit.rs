@@ -1,0 +1,313 @@
+//! Fitting whole-tyre state effects by linear least squares through the scaling factors'
+//! sensitivities.
+//!
+//! A state effect's coefficients enter the model through the logarithms of the MF scaling
+//! factors ([`crate::state`]). At the present model the change of each channel per unit of a
+//! factor's logarithm, S_f(k) = ∂pred_k/∂ln λ_f, is one model evaluation per factor (eight in
+//! all, whatever the number of coefficients), and to first order
+//!
+//!   pred_k(c) ≈ pred_k(c₀) + Σ_{f,b} S_f(k)·φ_b(z_k)·(c_{f,b} − c₀_{f,b}),
+//!
+//! linear in the coefficients (the loaded radius is exactly linear). So every state candidate
+//! of a round shares one set of sensitivities; a candidate's fit is a small normal-equation
+//! solve, its discrete choices (a temperature lag, break-in's energy scale) cost a solve each,
+//! and cross-validation only removes a fold's rows. A Gauss–Newton step re-linearises at the
+//! fitted coefficients, so large effects (a quarter of the grip) are fitted as well as small
+//! ones, and the held-out predictions are linearised at the all-sweeps fit, from which each
+//! fold's fit differs little.
+
+use crate::effects::{CH_RL, Effect, EffectParams, Evaluator, Perturb};
+use crate::state::{self, Choice, Term};
+use nalgebra::{DMatrix, DVector};
+
+/// Step of a factor's logarithm for the sensitivities.
+const LOG_STEP: f64 = 1e-4;
+/// Gauss–Newton steps after the first linear solve.
+const GN_STEPS: usize = 1;
+
+/// Predictions and per-factor sensitivities of a model at every point.
+#[derive(Debug, Clone)]
+pub struct Linearization {
+    /// Predictions [FX, FYW, MZW, DSTWOWHC].
+    pub pred: Vec<[f64; 4]>,
+    /// ∂pred/∂ln λ_f per [`state::SCALING`] factor.
+    pub sens: Vec<[[f64; 4]; 8]>,
+}
+
+/// Linearises the model with `effects` at every point (nine model evaluations per point).
+pub fn linearize(ev: &Evaluator<'_>, effects: &[EffectParams]) -> Linearization {
+    let all: Vec<usize> = (0..ev.ds.len()).collect();
+    let pred = ev.predict(effects, &all);
+    let mut sens = vec![[[0.0; 4]; 8]; all.len()];
+    for (f, _) in state::SCALING.iter().enumerate() {
+        let up = ev.predict_perturbed(effects, &all, Some(Perturb { factor: f, log_step: LOG_STEP }));
+        for (k, (u, p)) in up.iter().zip(&pred).enumerate() {
+            sens[k][f] = std::array::from_fn(|ch| {
+                let d = (u[ch] - p[ch]) / LOG_STEP;
+                if d.is_finite() { d } else { 0.0 }
+            });
+        }
+    }
+    Linearization { pred, sens }
+}
+
+/// One column of the design: a term of one of the effects being fitted, with its basis values
+/// at every point.
+#[derive(Debug, Clone)]
+pub struct Column {
+    /// Index of the effect in the fitted list.
+    pub slot: usize,
+    /// The term.
+    pub term: Term,
+    /// φ at every point.
+    pub phi: Vec<f64>,
+}
+
+/// The state effects being fitted together: their choices and terms as design columns.
+#[derive(Debug, Clone)]
+pub struct Design {
+    /// The effects with their present coefficients (the linearisation point).
+    pub effects: Vec<EffectParams>,
+    /// Columns.
+    pub cols: Vec<Column>,
+}
+
+impl Design {
+    /// A design for `effects` (state-scaling effects with their present coefficients) whose
+    /// terms are `terms[i]` (a new effect's terms start at 0).
+    pub fn new(ev: &Evaluator<'_>, effects: Vec<EffectParams>, terms: &[Vec<Term>]) -> Self {
+        let mut cols = Vec::new();
+        for (slot, (e, ts)) in effects.iter().zip(terms).enumerate() {
+            let choice = e.parsed().choice;
+            let mut cache: Vec<(u8, Vec<f64>)> = Vec::new();
+            for &t in ts {
+                let phi = match cache.iter().find(|(b, _)| *b == t.basis) {
+                    Some((_, v)) => v.clone(),
+                    None => {
+                        let v = ev.basis_at_points(e.effect, t.basis, &choice);
+                        cache.push((t.basis, v.clone()));
+                        v
+                    }
+                };
+                cols.push(Column { slot, term: t, phi });
+            }
+        }
+        Self { effects, cols }
+    }
+
+    /// Row of the design at point `k`, channel `ch`.
+    fn row(&self, lin: &Linearization, k: usize, ch: usize, out: &mut [f64]) {
+        for (o, c) in out.iter_mut().zip(&self.cols) {
+            *o = match c.term.factor.scaling_index() {
+                Some(f) => lin.sens[k][f][ch] * c.phi[k],
+                None if ch == CH_RL => 1e-3 * c.phi[k],
+                None => 0.0,
+            };
+        }
+    }
+
+    /// The effects with their coefficients moved by `delta` (one value per column).
+    pub fn updated(&self, delta: &DVector<f64>) -> Vec<EffectParams> {
+        let mut out = self.effects.clone();
+        for (c, d) in self.cols.iter().zip(delta.iter()) {
+            let e = &mut out[c.slot];
+            let key = state::term_key(e.effect, c.term);
+            match e.keys.iter().position(|k| *k == key) {
+                Some(i) => e.values[i] += d,
+                None => {
+                    e.keys.push(key);
+                    e.values.push(*d);
+                }
+            }
+        }
+        out
+    }
+}
+
+/// Normal equations over a set of points.
+#[derive(Debug, Clone)]
+struct Normal {
+    a: DMatrix<f64>,
+    b: DVector<f64>,
+}
+
+/// Accumulates JᵀWJ and JᵀW(target − pred) over `which`, with `target(k)` the measured values
+/// (less any correction) at point `k`.
+fn normal(
+    design: &Design,
+    lin: &Linearization,
+    which: &[usize],
+    target: &dyn Fn(usize) -> [f64; 4],
+    sigma: &[f64; 4],
+) -> Normal {
+    let m = design.cols.len();
+    let mut a = DMatrix::<f64>::zeros(m, m);
+    let mut b = DVector::<f64>::zeros(m);
+    let mut row = vec![0.0; m];
+    for &k in which {
+        let t = target(k);
+        for ch in 0..4 {
+            let r = (t[ch] - lin.pred[k][ch]) / sigma[ch];
+            if !r.is_finite() {
+                continue;
+            }
+            design.row(lin, k, ch, &mut row);
+            for i in 0..m {
+                let ri = row[i] / sigma[ch];
+                if ri == 0.0 {
+                    continue;
+                }
+                b[i] += ri * r;
+                for j in 0..=i {
+                    a[(i, j)] += ri * row[j] / sigma[ch];
+                }
+            }
+        }
+    }
+    for i in 0..m {
+        for j in 0..i {
+            a[(j, i)] = a[(i, j)];
+        }
+    }
+    Normal { a, b }
+}
+
+/// Solves the normal equations with a small ridge (a column the data do not reach stays at 0).
+fn solve(n: &Normal) -> DVector<f64> {
+    let m = n.b.len();
+    let mut a = n.a.clone();
+    let scale = (0..m).map(|i| a[(i, i)]).fold(0.0, f64::max).max(1e-300);
+    for i in 0..m {
+        a[(i, i)] += 1e-9 * scale + if a[(i, i)] <= 1e-12 * scale { scale } else { 0.0 };
+    }
+    a.cholesky().map_or_else(|| DVector::zeros(m), |c| c.solve(&n.b))
+}
+
+/// Columns of the effect in `slot` the data determine (for the parameter count of the
+/// evidence): a column the points never reach (FX terms on a cornering run) adds nothing.
+pub fn determined_columns(
+    ev: &Evaluator<'_>,
+    design: &Design,
+    lin: &Linearization,
+    sigma: &[f64; 4],
+    slot: usize,
+) -> usize {
+    let all: Vec<usize> = (0..ev.ds.len()).collect();
+    let n = normal(design, lin, &all, &|_| [0.0; 4], sigma);
+    let scale = (0..n.b.len()).map(|i| n.a[(i, i)]).fold(0.0, f64::max);
+    (0..n.b.len()).filter(|&i| design.cols[i].slot == slot && n.a[(i, i)] > 1e-9 * scale).count()
+}
+
+/// What fitting a state design on all sweeps gives.
+#[derive(Debug, Clone)]
+pub struct Fitted {
+    /// The effects with fitted coefficients.
+    pub effects: Vec<EffectParams>,
+    /// Linearisation at the fit (its predictions are the fit's).
+    pub lin: Linearization,
+    /// The design at the fit (columns as fitted).
+    pub design: Design,
+}
+
+/// Fits a design on all points to `target` (measured less any correction), with Gauss–Newton
+/// steps from the linearisation `lin0` of the model at the design's present coefficients.
+pub fn fit_all(
+    ev: &Evaluator<'_>,
+    design: Design,
+    lin0: &Linearization,
+    fixed: &[EffectParams],
+    target: &dyn Fn(usize) -> [f64; 4],
+    sigma: &[f64; 4],
+) -> Fitted {
+    let all: Vec<usize> = (0..ev.ds.len()).collect();
+    let mut design = design;
+    let mut delta = solve(&normal(&design, lin0, &all, target, sigma));
+    let mut lin;
+    let mut step = 0;
+    loop {
+        let effects = design.updated(&delta);
+        let model: Vec<EffectParams> = fixed.iter().cloned().chain(effects.iter().cloned()).collect();
+        lin = linearize(ev, &model);
+        design = Design { effects, cols: design.cols };
+        if step == GN_STEPS {
+            break;
+        }
+        delta = solve(&normal(&design, &lin, &all, target, sigma));
+        step += 1;
+    }
+    Fitted { effects: design.effects.clone(), lin, design }
+}
+
+/// Cross-validated predictions of a design linearised at `lin`: for each fold, the
+/// coefficients refitted on the other folds (to `targets[fold]`, the measurements less that
+/// fold's correction) and the fold's points predicted, plus `held_out_add[fold]` (its
+/// correction) where given.
+pub fn cross_validate(
+    design: &Design,
+    lin: &Linearization,
+    folds: &[Vec<usize>],
+    target_of_fold: &dyn Fn(usize, usize) -> [f64; 4],
+    held_out_add: &dyn Fn(usize, usize) -> [f64; 4],
+    sigma: &[f64; 4],
+) -> Vec<[f64; 4]> {
+    let n_points = lin.pred.len();
+    let mut out = vec![[f64::NAN; 4]; n_points];
+    let m = design.cols.len();
+    let mut row = vec![0.0; m];
+    for (fi, test) in folds.iter().enumerate() {
+        let train: Vec<usize> =
+            folds.iter().enumerate().filter(|(j, _)| *j != fi).flat_map(|(_, v)| v.iter().copied()).collect();
+        let delta = if m == 0 {
+            DVector::zeros(0)
+        } else {
+            solve(&normal(design, lin, &train, &|k| target_of_fold(fi, k), sigma))
+        };
+        for &k in test {
+            let add = held_out_add(fi, k);
+            out[k] = std::array::from_fn(|ch| {
+                design.row(lin, k, ch, &mut row);
+                let d: f64 = row.iter().zip(delta.iter()).map(|(x, y)| x * y).sum();
+                lin.pred[k][ch] + d + add[ch]
+            });
+        }
+    }
+    out
+}
+
+/// The design of present state effects plus a new candidate with `choice` (its terms at 0).
+pub fn with_candidate(
+    ev: &Evaluator<'_>,
+    present: &[EffectParams],
+    present_terms: &[Vec<Term>],
+    effect: Effect,
+    choice: Choice,
+    terms: Vec<Term>,
+) -> Design {
+    let entries = choice.entries(effect);
+    let new = EffectParams {
+        effect,
+        keys: entries.iter().map(|(k, _)| k.clone()).collect(),
+        values: entries.iter().map(|(_, v)| *v).collect(),
+    };
+    let mut effects = present.to_vec();
+    effects.push(new);
+    let mut ts = present_terms.to_vec();
+    ts.push(terms);
+    Design::new(ev, effects, &ts)
+}
+
+/// χ² of `target` against a design's linear prediction after a solve on all points (for
+/// choosing among a candidate's discrete choices).
+pub fn chi2_after_solve(
+    ev: &Evaluator<'_>,
+    design: &Design,
+    lin: &Linearization,
+    target: &dyn Fn(usize) -> [f64; 4],
+    sigma: &[f64; 4],
+) -> f64 {
+    let all: Vec<usize> = (0..ev.ds.len()).collect();
+    let n = normal(design, lin, &all, target, sigma);
+    let d = solve(&n);
+    // χ²(Δ) = χ²(0) − 2bᵀΔ + ΔᵀAΔ; only the part that depends on Δ is needed to compare.
+    -2.0 * n.b.dot(&d) + (d.transpose() * &n.a * &d)[(0, 0)]
+}

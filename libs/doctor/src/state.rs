@@ -1,0 +1,419 @@
+//! Whole-tyre state effects: one state variable of the tyre (tread temperature, wear, break-in,
+//! belt speed, the specimen) acting through the MF scaling factors on every channel at once.
+//!
+//! A state of the tyre changes the whole tyre: grip and stiffness of both forces, the shape of
+//! the curves, the aligning moment's trail and residual moment, the loaded radius. Which of
+//! these moves, and by how much, is for the data to say, not for a fixed form: each factor gets
+//! its own coefficients on the effect's basis functions of the state variable,
+//!
+//!   λ_f ×= exp(Σ_b c_{f,b}·φ_b(z)),   Rl += Σ_b c_{Rl,b}·φ_b(z) mm,
+//!
+//! so a factor the data do not move stays at zero (log-linear: the coefficients enter the
+//! prediction through the factors' sensitivities, which [`crate::linfit`] exploits to fit them
+//! by linear least squares). Nonlinear knobs of the state variable (the lag of the temperature
+//! that sets grip, break-in's energy scale and power threshold) are discrete choices made on
+//! the data.
+//!
+//! | effect | z | basis φ_b |
+//! |---|---|---|
+//! | thermal | x = (T_lag − T_ref)/10 K, T_lag the grip temperature through a first-order lag τ ∈ [`THERMAL_LAGS_S`] | grip 1, x, x²; stiffness 1, x; trail, residual moment, radius x |
+//! | wear | sliding energy E [MJ] | E on grip, stiffness, shape, trail, residual moment, radius |
+//! | break_in | r = exp(−E_sev/E₀), E_sev above a power threshold | r on grip, stiffness, shape, trail, residual moment |
+//! | speed | (V − V_ref)/V_ref | on grip and stiffness |
+//! | specimen | 1 on the j-th tyre (log) of the test, j ≥ 1 | on grip, stiffness, trail, residual moment, radius |
+
+use crate::effects::Effect;
+use mftyre::ScalingFactors;
+
+/// A quantity a state effect moves.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord)]
+pub enum Factor {
+    /// Longitudinal friction λμx.
+    MuX,
+    /// Lateral friction λμy.
+    MuY,
+    /// Longitudinal slip stiffness λKx.
+    Kx,
+    /// Cornering stiffness λKy.
+    Ky,
+    /// Longitudinal shape λCx.
+    Cx,
+    /// Lateral shape λCy.
+    Cy,
+    /// Pneumatic trail λt (LTR).
+    Trail,
+    /// Residual aligning moment λMr (LRES).
+    ResMz,
+    /// Loaded radius (additive, mm).
+    Radius,
+}
+
+/// Factors that act through a scaling factor (all but the radius), in sensitivity order.
+pub const SCALING: [Factor; 8] =
+    [Factor::MuX, Factor::MuY, Factor::Kx, Factor::Ky, Factor::Cx, Factor::Cy, Factor::Trail, Factor::ResMz];
+
+impl Factor {
+    /// Key fragment in the extension section.
+    pub fn key(self) -> &'static str {
+        match self {
+            Factor::MuX => "MUX",
+            Factor::MuY => "MUY",
+            Factor::Kx => "KX",
+            Factor::Ky => "KY",
+            Factor::Cx => "CX",
+            Factor::Cy => "CY",
+            Factor::Trail => "TRAIL",
+            Factor::ResMz => "MRES",
+            Factor::Radius => "RL_MM",
+        }
+    }
+
+    /// Index into [`SCALING`] (`None` for the radius).
+    pub fn scaling_index(self) -> Option<usize> {
+        SCALING.iter().position(|f| *f == self)
+    }
+
+    /// Multiplies the scaling factor this factor names by `m`.
+    pub fn scale(self, sc: &mut ScalingFactors, m: f64) {
+        match self {
+            Factor::MuX => sc.lmux *= m,
+            Factor::MuY => sc.lmuy *= m,
+            Factor::Kx => sc.lkx *= m,
+            Factor::Ky => sc.lky *= m,
+            Factor::Cx => sc.lcx *= m,
+            Factor::Cy => sc.lcy *= m,
+            Factor::Trail => sc.ltr *= m,
+            Factor::ResMz => sc.lres *= m,
+            Factor::Radius => {}
+        }
+    }
+
+    fn parse(s: &str) -> Option<Factor> {
+        [SCALING.as_slice(), &[Factor::Radius]].concat().into_iter().find(|f| f.key() == s)
+    }
+}
+
+/// One coefficient of a state effect: a factor and a basis function.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct Term {
+    /// What it moves.
+    pub factor: Factor,
+    /// Basis index: the power of x for thermal, the tyre ordinal for specimen, 0 otherwise.
+    pub basis: u8,
+}
+
+/// Lags of the temperature that sets grip tried by `thermal` [s] (0: the grip temperature as
+/// read; longer: towards the tread's bulk, which lags the surface).
+pub const THERMAL_LAGS_S: [f64; 3] = [0.0, 30.0, 120.0];
+/// Break-in's severe-energy scales tried [kJ].
+pub const BREAK_IN_ENERGIES_KJ: [f64; 6] = [10.0, 30.0, 100.0, 300.0, 1000.0, 3000.0];
+/// Break-in's power thresholds tried [W].
+pub const BREAK_IN_THRESHOLDS_W: [f64; 4] = [0.0, 5_000.0, 10_000.0, 20_000.0];
+
+/// Key of the thermal lag in the extension section.
+pub const KEY_THERMAL_LAG_S: &str = "THERMAL_LAG_S";
+/// Key of break-in's energy scale.
+pub const KEY_BREAKIN_ENERGY_KJ: &str = "BREAKIN_ENERGY_KJ";
+/// Key of break-in's power threshold.
+pub const KEY_BREAKIN_THRESHOLD_KW: &str = "BREAKIN_THRESHOLD_KW";
+
+/// The discrete choice of a state variable's nonlinear knobs.
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub struct Choice {
+    /// Thermal: lag of the grip temperature [s].
+    pub lag_s: f64,
+    /// Break-in: severe-energy scale [kJ].
+    pub energy_kj: f64,
+    /// Break-in: power threshold [W].
+    pub threshold_w: f64,
+}
+
+impl Choice {
+    /// Knobs counted as parameters (each discrete choice made on the data).
+    pub fn n_knobs(effect: Effect) -> usize {
+        match effect {
+            Effect::Thermal => 1,
+            Effect::BreakIn => 2,
+            _ => 0,
+        }
+    }
+
+    /// The choices tried for `effect`.
+    pub fn grid(effect: Effect) -> Vec<Choice> {
+        match effect {
+            Effect::Thermal => THERMAL_LAGS_S.iter().map(|&lag_s| Choice { lag_s, ..Choice::default() }).collect(),
+            Effect::BreakIn => BREAK_IN_THRESHOLDS_W
+                .iter()
+                .flat_map(|&threshold_w| {
+                    BREAK_IN_ENERGIES_KJ.iter().map(move |&energy_kj| Choice { energy_kj, threshold_w, lag_s: 0.0 })
+                })
+                .collect(),
+            _ => vec![Choice::default()],
+        }
+    }
+
+    /// The choice as extension keys and values.
+    pub fn entries(&self, effect: Effect) -> Vec<(String, f64)> {
+        match effect {
+            Effect::Thermal => vec![(KEY_THERMAL_LAG_S.to_owned(), self.lag_s)],
+            Effect::BreakIn => vec![
+                (KEY_BREAKIN_ENERGY_KJ.to_owned(), self.energy_kj),
+                (KEY_BREAKIN_THRESHOLD_KW.to_owned(), self.threshold_w * 1e-3),
+            ],
+            _ => vec![],
+        }
+    }
+}
+
+/// True for effects of this family (fitted through the scaling factors' sensitivities).
+pub fn is_state_scaling(effect: Effect) -> bool {
+    matches!(effect, Effect::Thermal | Effect::Wear | Effect::BreakIn | Effect::Speed | Effect::Specimen)
+}
+
+/// Key prefix of an effect's terms.
+pub fn prefix(effect: Effect) -> &'static str {
+    match effect {
+        Effect::Thermal => "THERMAL",
+        Effect::Wear => "WEAR",
+        Effect::BreakIn => "BREAKIN",
+        Effect::Speed => "SPEED",
+        Effect::Specimen => "SPECIMEN",
+        _ => "",
+    }
+}
+
+/// The extension key of a term: `THERMAL_MUY_2` (x² on λμy), `WEAR_RL_MM`, `SPECIMEN_KY_T1`.
+pub fn term_key(effect: Effect, t: Term) -> String {
+    match effect {
+        Effect::Thermal => format!("{}_{}_{}", prefix(effect), t.factor.key(), t.basis),
+        Effect::Specimen => format!("{}_{}_T{}", prefix(effect), t.factor.key(), t.basis),
+        _ => format!("{}_{}", prefix(effect), t.factor.key()),
+    }
+}
+
+/// Parses a term key of `effect` (`None` for other keys, e.g. the choice's).
+pub fn parse_term(effect: Effect, key: &str) -> Option<Term> {
+    let rest = key.strip_prefix(prefix(effect))?.strip_prefix('_')?;
+    match effect {
+        Effect::Thermal => {
+            let (f, b) = rest.rsplit_once('_')?;
+            Some(Term { factor: Factor::parse(f)?, basis: b.parse().ok()? })
+        }
+        Effect::Specimen => {
+            let (f, b) = rest.rsplit_once("_T")?;
+            Some(Term { factor: Factor::parse(f)?, basis: b.parse().ok()? })
+        }
+        _ => Some(Term { factor: Factor::parse(rest)?, basis: 0 }),
+    }
+}
+
+/// What the data can show, for choosing an effect's terms.
+#[derive(Debug, Clone, Copy)]
+pub struct Coverage {
+    /// Slip-angle sweeps (FY, the aligning moment).
+    pub lateral: bool,
+    /// Slip-ratio sweeps (FX).
+    pub longitudinal: bool,
+    /// The loaded radius is diagnosed.
+    pub radius: bool,
+    /// Tyres (logs) in the test.
+    pub tyres: usize,
+}
+
+/// The terms of `effect` the data can determine.
+pub fn terms(effect: Effect, cov: Coverage) -> Vec<Term> {
+    let t = |factor, basis| Term { factor, basis };
+    let mut grip = Vec::new();
+    let mut stiff = Vec::new();
+    let mut shape = Vec::new();
+    let mut moment = Vec::new();
+    if cov.longitudinal {
+        grip.push(Factor::MuX);
+        stiff.push(Factor::Kx);
+        shape.push(Factor::Cx);
+    }
+    if cov.lateral {
+        grip.push(Factor::MuY);
+        stiff.push(Factor::Ky);
+        shape.push(Factor::Cy);
+        moment.extend([Factor::Trail, Factor::ResMz]);
+    }
+    let radius: Vec<Factor> = if cov.radius { vec![Factor::Radius] } else { vec![] };
+    let mut out = Vec::new();
+    match effect {
+        Effect::Thermal => {
+            for &f in &grip {
+                out.extend((0..3).map(|b| t(f, b)));
+            }
+            for &f in &stiff {
+                out.extend((0..2).map(|b| t(f, b)));
+            }
+            out.extend(moment.iter().chain(&radius).map(|&f| t(f, 1)));
+        }
+        Effect::Wear => {
+            out.extend(grip.iter().chain(&stiff).chain(&shape).chain(&moment).chain(&radius).map(|&f| t(f, 0)));
+        }
+        Effect::BreakIn => {
+            out.extend(grip.iter().chain(&stiff).chain(&shape).chain(&moment).map(|&f| t(f, 0)));
+        }
+        Effect::Speed => out.extend(grip.iter().chain(&stiff).map(|&f| t(f, 0))),
+        Effect::Specimen => {
+            for j in 1..cov.tyres.min(256) {
+                out.extend(grip.iter().chain(&stiff).chain(&moment).chain(&radius).map(|&f| t(f, j as u8)));
+            }
+        }
+        _ => {}
+    }
+    out
+}
+
+/// The state a state effect's basis reads at one sample.
+#[derive(Debug, Clone, Copy, Default)]
+pub struct StateAt {
+    /// Grip temperature through the effect's lag [°C].
+    pub temp_c: f64,
+    /// Sliding energy on this tyre so far [MJ].
+    pub energy_mj: f64,
+    /// Sliding energy above the break-in threshold so far [kJ].
+    pub severe_kj: f64,
+    /// Belt speed [m/s].
+    pub speed_mps: f64,
+    /// Ordinal of the tyre (log) in the test.
+    pub tyre: usize,
+}
+
+/// Reference points of the state variables.
+#[derive(Debug, Clone, Copy)]
+pub struct References {
+    /// Thermal reference temperature [°C].
+    pub t_ref_c: f64,
+    /// Speed reference [m/s].
+    pub v_ref_mps: f64,
+}
+
+/// Basis function `basis` of `effect` at a state (`choice` gives break-in's energy scale).
+pub fn basis(effect: Effect, basis: u8, st: &StateAt, choice: &Choice, refs: &References) -> f64 {
+    match effect {
+        Effect::Thermal => {
+            let x = if st.temp_c.is_finite() { (st.temp_c - refs.t_ref_c) / 10.0 } else { 0.0 };
+            x.powi(i32::from(basis))
+        }
+        Effect::Wear => st.energy_mj,
+        Effect::BreakIn => (-st.severe_kj / choice.energy_kj.max(1e-3)).exp(),
+        Effect::Speed => (st.speed_mps - refs.v_ref_mps) / refs.v_ref_mps.max(0.1),
+        Effect::Specimen => f64::from(u8::from(st.tyre == usize::from(basis))),
+        _ => 0.0,
+    }
+}
+
+/// A state effect's coefficients, parsed once for evaluation.
+#[derive(Debug, Clone)]
+pub struct Parsed {
+    /// The effect.
+    pub effect: Effect,
+    /// Its choice of knobs.
+    pub choice: Choice,
+    /// Terms and their coefficients.
+    pub terms: Vec<(Term, f64)>,
+}
+
+impl Parsed {
+    /// Parses keys and values (terms and the choice's keys); other keys are ignored.
+    pub fn from_entries<'k>(effect: Effect, entries: impl Iterator<Item = (&'k str, f64)>) -> Self {
+        let mut out = Parsed { effect, choice: Choice::default(), terms: Vec::new() };
+        for (k, v) in entries {
+            if k.eq_ignore_ascii_case(KEY_THERMAL_LAG_S) {
+                out.choice.lag_s = v;
+            } else if k.eq_ignore_ascii_case(KEY_BREAKIN_ENERGY_KJ) {
+                out.choice.energy_kj = v;
+            } else if k.eq_ignore_ascii_case(KEY_BREAKIN_THRESHOLD_KW) {
+                out.choice.threshold_w = v * 1e3;
+            } else if let Some(t) = parse_term(effect, &k.to_ascii_uppercase()) {
+                out.terms.push((t, v));
+            }
+        }
+        out
+    }
+
+    /// Adds this effect's log-factors (per [`SCALING`]) and radius change [m] at a state.
+    pub fn accumulate(&self, st: &StateAt, refs: &References, log_f: &mut [f64; 8], drl_m: &mut f64) {
+        for (t, c) in &self.terms {
+            let v = c * basis(self.effect, t.basis, st, &self.choice, refs);
+            match t.factor.scaling_index() {
+                Some(i) => log_f[i] += v,
+                None => *drl_m += v * 1e-3,
+            }
+        }
+    }
+}
+
+/// Largest change of a factor a state effect may make (a factor of e^±1.2 ≈ 0.3–3.3): beyond
+/// it the model is extrapolating, not describing a tyre.
+pub const MAX_LOG_FACTOR: f64 = 1.2;
+
+/// Applies log-factors to a set of scaling factors.
+pub fn apply(sc: &mut ScalingFactors, log_f: &[f64; 8]) {
+    for (f, l) in SCALING.iter().zip(log_f) {
+        f.scale(sc, l.clamp(-MAX_LOG_FACTOR, MAX_LOG_FACTOR).exp());
+    }
+}
+
+/// First-order lag of `y` over time `t` with time constant `tau_s` (0: `y` itself); restarts
+/// at `restart` (a new tyre). Through a gap the lag goes on from the last value.
+pub fn lagged(t: &[f64], y: &[f64], restart: &[bool], tau_s: f64) -> Vec<f64> {
+    if tau_s <= 0.0 {
+        return y.to_vec();
+    }
+    let mut out = Vec::with_capacity(y.len());
+    let mut state = f64::NAN;
+    for i in 0..y.len() {
+        let v = y[i];
+        if restart[i] || !state.is_finite() {
+            state = v;
+        } else if v.is_finite() {
+            let dt = (t[i] - t[i - 1]).max(0.0);
+            state += (1.0 - (-dt / tau_s).exp()) * (v - state);
+        }
+        out.push(state);
+    }
+    out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn keys_round_trip() {
+        let cov = Coverage { lateral: true, longitudinal: true, radius: true, tyres: 3 };
+        for e in [Effect::Thermal, Effect::Wear, Effect::BreakIn, Effect::Speed, Effect::Specimen] {
+            let ts = terms(e, cov);
+            assert!(!ts.is_empty(), "{e:?}");
+            for t in ts {
+                assert_eq!(parse_term(e, &term_key(e, t)), Some(t), "{}", term_key(e, t));
+            }
+        }
+        assert_eq!(parse_term(Effect::Thermal, KEY_THERMAL_LAG_S), None);
+    }
+
+    #[test]
+    fn terms_follow_what_the_data_cover() {
+        let lat = Coverage { lateral: true, longitudinal: false, radius: false, tyres: 1 };
+        let wear = terms(Effect::Wear, lat);
+        assert!(wear.iter().all(|t| !matches!(t.factor, Factor::MuX | Factor::Kx | Factor::Cx | Factor::Radius)));
+        assert!(wear.iter().any(|t| t.factor == Factor::MuY), "wear moves grip too");
+        assert!(terms(Effect::Specimen, lat).is_empty(), "one tyre: no specimen terms");
+    }
+
+    #[test]
+    fn lag_follows_a_step_with_its_time_constant() {
+        let t: Vec<f64> = (0..=100).map(f64::from).collect();
+        let y: Vec<f64> = t.iter().map(|&x| if x < 1.0 { 0.0 } else { 10.0 }).collect();
+        let mut restart = vec![false; t.len()];
+        restart[0] = true;
+        let l = lagged(&t, &y, &restart, 20.0);
+        // Twenty steps of 1 s after the step (at samples 1..=20).
+        assert!((l[20] - 10.0 * (1.0 - (-1.0f64).exp())).abs() < 1e-9, "{}", l[20]);
+        assert_eq!(lagged(&t, &y, &restart, 0.0), y);
+    }
+}
