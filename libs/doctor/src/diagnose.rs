@@ -269,8 +269,6 @@ struct CandidateFit {
     pred_fit: Vec<[f64; 4]>,
     /// Held-out predictions (with the held-out correction where form-corrected).
     pred_ho: Vec<[f64; 4]>,
-    /// Nonlinear effects' specs after adding it (state effects are not among them).
-    specs: Vec<FitSpec>,
 }
 
 type Scored = (CandidateScore, Option<CandidateFit>);
@@ -368,8 +366,6 @@ struct Ctx<'a> {
 struct Round<'r> {
     /// Everything added so far, fitted on all sweeps.
     present: &'r [EffectParams],
-    /// Specs of the nonlinear effects added so far (refitted with a new nonlinear candidate).
-    specs: &'r [FitSpec],
     /// Held-out predictions of the present model.
     cur_ho: &'r [[f64; 4]],
     /// Its form error, where state candidates are scored against it.
@@ -511,20 +507,20 @@ impl Ctx<'_> {
         let pred_ho =
             linfit::cross_validate(&fitted.design, &fitted.lin, &self.fl, &target_fold, &add_fold, &self.sigma);
         let model: Vec<EffectParams> = fixed.into_iter().chain(fitted.effects).collect();
-        Some((CandidateFit { model, pred_fit: fitted.lin.pred, pred_ho, specs: r.specs.to_vec() }, k))
+        Some((CandidateFit { model, pred_fit: fitted.lin.pred, pred_ho }, k))
     }
 
-    /// A nonlinear candidate (transient, the refits): Levenberg–Marquardt per fold with the
-    /// nonlinear effects already named, the state effects held at their fit.
+    /// A nonlinear candidate (transient, the refits): Levenberg–Marquardt per fold, everything
+    /// already added held at its fit on all sweeps (refitting them too would multiply the cost
+    /// of every later round; the state effects are refitted per fold in their own rounds).
     fn fit_nonlinear(&self, r: &Round<'_>, eff: Effect, fe: Option<&FormError>) -> Option<(CandidateFit, usize)> {
         let new = FitSpec { effect: eff, params: param_specs(eff, self.ds, self.base) };
         let k = new.params.len();
         if k == 0 {
             return None;
         }
-        let mut specs = r.specs.to_vec();
-        specs.push(new);
-        let fixed = r.state_effects();
+        let specs = [new];
+        let fixed = r.present.to_vec();
         let (ev, meas, sigma, opt) = (&self.ev, &self.meas, self.sigma, self.cfg.fit);
         let pred_ho = match fe {
             Some(f) => cross_validate_corrected(ev, &specs, &fixed, &self.fl, meas, sigma, opt, &f.per_fold),
@@ -535,9 +531,9 @@ impl Ctx<'_> {
             None => meas.clone(),
         };
         let (fitted, _) = fit_effects(ev, &specs, &fixed, &self.all, &target, sigma, opt);
-        let model: Vec<EffectParams> = fitted.into_iter().chain(fixed).collect();
+        let model: Vec<EffectParams> = fixed.into_iter().chain(fitted).collect();
         let pred_fit = ev.predict(&model, &self.all);
-        Some((CandidateFit { model, pred_fit, pred_ho, specs }, k))
+        Some((CandidateFit { model, pred_fit, pred_ho }, k))
     }
 }
 
@@ -777,7 +773,6 @@ pub fn diagnose(ds: &Dataset, base: &TyreParams, cfg: &DoctorConfig) -> Result<D
     let ctx = Ctx { ds, base, cfg, ev, meas, sigma, fl, fold_of, all, n_res, coverage };
 
     let mut present: Vec<EffectParams> = Vec::new();
-    let mut specs: Vec<FitSpec> = Vec::new();
     let mut cur_fit = base_pred.clone();
     let mut cur_ho = base_pred.clone();
     let mut named: Vec<NamedEffect> = Vec::new();
@@ -808,8 +803,7 @@ pub fn diagnose(ds: &Dataset, base: &TyreParams, cfg: &DoctorConfig) -> Result<D
             FormError { per_fold, all: all_corr, before_heldout }
         });
         let lin = linfit::linearize(&ctx.ev, &present);
-        let round =
-            Round { present: &present, specs: &specs, cur_ho: &cur_ho, form_error: form_error.as_ref(), lin: &lin };
+        let round = Round { present: &present, cur_ho: &cur_ho, form_error: form_error.as_ref(), lin: &lin };
         let todo: Vec<Effect> =
             cfg.candidates.iter().copied().filter(|e| !named.iter().any(|n| n.effect == *e)).collect();
         let m_tests = todo.iter().filter(|e| untestable_reason(**e, ds).is_none()).count();
@@ -855,7 +849,6 @@ pub fn diagnose(ds: &Dataset, base: &TyreParams, cfg: &DoctorConfig) -> Result<D
         plot.region.push(acc.region);
         named.push(acc.named);
         present = acc.fit.model;
-        specs = acc.fit.specs;
         cur_fit = acc.fit.pred_fit;
         cur_ho = acc.pred_ho_model;
     }

@@ -311,7 +311,15 @@ pub struct Evaluator<'a> {
     severe: Vec<Vec<f64>>,
     /// Grip temperature through each of [`state::THERMAL_LAGS_S`] [°C].
     lagged_temp: Vec<Vec<f64>>,
+    /// The last relaxed slip series by transient parameters: a named transient held fixed is
+    /// evaluated again with every prediction, and its recursion runs over every full-rate
+    /// sample.
+    relaxed_cache: std::sync::Mutex<Vec<RelaxedEntry>>,
 }
+
+type RelaxedEntry = (Vec<f64>, std::sync::Arc<(Vec<f64>, Vec<f64>)>);
+/// Relaxed series kept (a few: candidates are scored on parallel workers).
+const RELAXED_CACHE: usize = 4;
 
 /// A perturbation of one scaling factor's logarithm (for sensitivities).
 #[derive(Debug, Clone, Copy)]
@@ -334,7 +342,7 @@ impl<'a> Evaluator<'a> {
         let lagged_temp =
             state::THERMAL_LAGS_S.iter().map(|&tau| state::lagged(&s.t_s, &s.temp_grip_c, &s.new_tyre, tau)).collect();
         let v_ref_mps = if base.longvl_mps() > 0.0 { base.longvl_mps() } else { 16.6 };
-        Self { ds, base, t_ref_c, v_ref_mps, severe, lagged_temp }
+        Self { ds, base, t_ref_c, v_ref_mps, severe, lagged_temp, relaxed_cache: std::sync::Mutex::new(Vec::new()) }
     }
 
     /// The references of the state variables.
@@ -371,6 +379,24 @@ impl<'a> Evaluator<'a> {
             }
         }
         (a, k)
+    }
+
+    /// [`Self::relaxed`], remembered for the last few parameter sets.
+    fn relaxed_cached(&self, e: &EffectParams) -> std::sync::Arc<(Vec<f64>, Vec<f64>)> {
+        let key = e.values.clone();
+        if let Ok(c) = self.relaxed_cache.lock()
+            && let Some((_, v)) = c.iter().find(|(k, _)| *k == key)
+        {
+            return v.clone();
+        }
+        let v = std::sync::Arc::new(self.relaxed(e));
+        if let Ok(mut c) = self.relaxed_cache.lock() {
+            if c.len() >= RELAXED_CACHE {
+                c.remove(0);
+            }
+            c.push((key, v.clone()));
+        }
+        v
     }
 
     /// The state series a state effect's choice reads: lagged temperature and severe energy
@@ -435,7 +461,7 @@ impl<'a> Evaluator<'a> {
                 }
             }
         }
-        let relaxed = effects.iter().find(|e| e.effect == Effect::Transient).map(|e| self.relaxed(e));
+        let relaxed = effects.iter().find(|e| e.effect == Effect::Transient).map(|e| self.relaxed_cached(e));
         let states: Vec<_> = effects
             .iter()
             .filter(|e| state::is_state_scaling(e.effect))
@@ -462,7 +488,7 @@ impl<'a> Evaluator<'a> {
                 }
                 let mut sc = params.scaling;
                 state::apply(&mut sc, &log_f);
-                let (alpha_deg, kappa) = match &relaxed {
+                let (alpha_deg, kappa) = match relaxed.as_deref() {
                     Some((a, k)) => (a[i], k[i]),
                     None => (s.alpha_deg[i], s.kappa[i]),
                 };

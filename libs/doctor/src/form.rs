@@ -119,23 +119,78 @@ const SLOPE_RIDGE: f64 = 0.5;
 /// Squared scaled distance beyond which a neighbour is ignored (kernel weight < 10⁻³).
 const MAX_D2: f64 = 13.8;
 
-/// Local-linear kernel regression at point `k` of `resid` over the points `from` whose sweep
+/// The points a smoother may draw on, indexed for neighbour search: cells of one cut-off
+/// radius in slip ratio, load, camber and pressure, and within a cell the points sorted by slip
+/// angle, so a query visits the 3⁴ neighbouring cells and only the slip-angle window within
+/// the cut-off in each. The smoother was O(N²) (every point against every other); a full
+/// GS2MF log (8,000 points) spent most of a diagnosis there.
+struct NeighbourIndex {
+    cells: std::collections::HashMap<[i64; 4], Vec<(f64, usize)>>,
+}
+
+/// Cut-off radius in scaled units (√MAX_D2).
+fn cutoff() -> f64 {
+    MAX_D2.sqrt()
+}
+
+impl NeighbourIndex {
+    fn cell(p: &[f64; 5]) -> Option<[i64; 4]> {
+        let r = cutoff();
+        let c: [f64; 4] = std::array::from_fn(|m| (p[m + 1] / r).floor());
+        c.iter().all(|v| v.is_finite() && v.abs() < 1e15).then(|| c.map(|v| v as i64))
+    }
+
+    fn new(x: &[[f64; 5]], from: &[usize]) -> Self {
+        let mut cells: std::collections::HashMap<[i64; 4], Vec<(f64, usize)>> = std::collections::HashMap::new();
+        for &j in from {
+            if let Some(c) = Self::cell(&x[j])
+                && x[j][0].is_finite()
+            {
+                cells.entry(c).or_default().push((x[j][0], j));
+            }
+        }
+        for v in cells.values_mut() {
+            v.sort_by(|a, b| a.0.total_cmp(&b.0));
+        }
+        Self { cells }
+    }
+
+    /// Calls `f` with every indexed point within the cut-off box around `p`.
+    fn for_each_near(&self, p: &[f64; 5], mut f: impl FnMut(usize)) {
+        let Some(c) = Self::cell(p) else { return };
+        let r = cutoff();
+        for d in 0..81i64 {
+            let off = [d % 3 - 1, (d / 3) % 3 - 1, (d / 9) % 3 - 1, (d / 27) % 3 - 1];
+            let key: [i64; 4] = std::array::from_fn(|m| c[m] + off[m]);
+            let Some(v) = self.cells.get(&key) else { continue };
+            let lo = v.partition_point(|e| e.0 < p[0] - r);
+            for e in &v[lo..] {
+                if e.0 > p[0] + r {
+                    break;
+                }
+                f(e.1);
+            }
+        }
+    }
+}
+
+/// Local-linear kernel regression at point `k` of `resid` over the indexed points whose sweep
 /// differs from `k`'s: the form error between neighbouring loads, cambers and pressures is
 /// interpolated along its trend, where a plain kernel average would be pulled towards the
 /// side with more data (the highest load of a test has neighbours only below it).
-fn smooth_at(ds: &Dataset, x: &[[f64; 5]], resid: &[[f64; 4]], from: &[usize], k: usize) -> [f64; 4] {
+fn smooth_at(ds: &Dataset, x: &[[f64; 5]], resid: &[[f64; 4]], index: &NeighbourIndex, k: usize) -> [f64; 4] {
     use nalgebra::{Matrix6, Vector6};
     let own = ds.point_sweep(k);
     let mut a = [Matrix6::<f64>::zeros(); 4];
     let mut b = [Vector6::<f64>::zeros(); 4];
-    for &j in from {
+    index.for_each_near(&x[k], |j| {
         if ds.point_sweep(j) == own {
-            continue;
+            return;
         }
         let d: [f64; 5] = std::array::from_fn(|m| x[j][m] - x[k][m]);
         let d2: f64 = d.iter().map(|v| v * v).sum();
         if d2 > MAX_D2 || !d2.is_finite() {
-            continue;
+            return;
         }
         let w = (-0.5 * d2).exp();
         let z = Vector6::new(1.0, d[0], d[1], d[2], d[3], d[4]);
@@ -147,7 +202,7 @@ fn smooth_at(ds: &Dataset, x: &[[f64; 5]], resid: &[[f64; 4]], from: &[usize], k
                 b[ch] += w * r * z;
             }
         }
-    }
+    });
     std::array::from_fn(|ch| {
         let mut m = a[ch];
         m[(0, 0)] += PRIOR_WEIGHT;
@@ -163,7 +218,7 @@ fn smooth_at(ds: &Dataset, x: &[[f64; 5]], resid: &[[f64; 4]], from: &[usize], k
 pub fn cross_fitted(ds: &Dataset, resid: &[[f64; 4]], folds: &[Vec<usize>], bw: &Bandwidths) -> Vec<FoldCorrection> {
     let x = scaled_points(ds, bw);
     let (x, resid) = (&x, resid);
-    // Folds are independent (and each is N² kernel evaluations): one worker per fold.
+    // Folds are independent: one worker per fold.
     std::thread::scope(|sc| {
         let handles: Vec<_> = (0..folds.len())
             .map(|fi| {
@@ -174,7 +229,8 @@ pub fn cross_fitted(ds: &Dataset, resid: &[[f64; 4]], folds: &[Vec<usize>], bw: 
                         .filter(|(j, _)| *j != fi)
                         .flat_map(|(_, v)| v.iter().copied())
                         .collect();
-                    (0..ds.len()).map(|k| smooth_at(ds, x, resid, &train, k)).collect::<FoldCorrection>()
+                    let index = NeighbourIndex::new(x, &train);
+                    (0..ds.len()).map(|k| smooth_at(ds, x, resid, &index, k)).collect::<FoldCorrection>()
                 })
             })
             .collect();
@@ -187,7 +243,8 @@ pub fn cross_fitted(ds: &Dataset, resid: &[[f64; 4]], folds: &[Vec<usize>], bw: 
 pub fn leave_one_sweep_out(ds: &Dataset, resid: &[[f64; 4]], bw: &Bandwidths) -> FoldCorrection {
     let x = scaled_points(ds, bw);
     let all: Vec<usize> = (0..ds.len()).collect();
-    (0..ds.len()).map(|k| smooth_at(ds, &x, resid, &all, k)).collect()
+    let index = NeighbourIndex::new(&x, &all);
+    (0..ds.len()).map(|k| smooth_at(ds, &x, resid, &index, k)).collect()
 }
 
 #[cfg(test)]
@@ -227,6 +284,33 @@ mod tests {
         }
         ds.series = s;
         (ds, resid)
+    }
+
+    #[test]
+    fn the_neighbour_index_finds_every_point_within_the_cut_off() {
+        // Points scattered over a few levels in every dimension; the index must return a
+        // superset of the brute-force neighbours within the cut-off.
+        let mut x = Vec::new();
+        let mut seed = 7u64;
+        let mut rnd = || {
+            seed = seed.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+            (seed >> 11) as f64 / (1u64 << 53) as f64
+        };
+        for _ in 0..600 {
+            x.push([40.0 * rnd() - 20.0, 10.0 * rnd() - 5.0, (4.0 * rnd()).floor(), rnd() - 0.5, 2.0 * rnd()]);
+        }
+        let all: Vec<usize> = (0..x.len()).collect();
+        let index = NeighbourIndex::new(&x, &all);
+        for k in 0..x.len() {
+            let mut found = Vec::new();
+            index.for_each_near(&x[k], |j| found.push(j));
+            for j in 0..x.len() {
+                let d2: f64 = (0..5).map(|m| (x[j][m] - x[k][m]).powi(2)).sum();
+                if d2 <= MAX_D2 {
+                    assert!(found.contains(&j), "point {j} within the cut-off of {k} not found");
+                }
+            }
+        }
     }
 
     #[test]

@@ -42,7 +42,7 @@ pub struct DoctorArgs {
     #[arg(long, default_value_t = 3)]
     max_effects: usize,
     /// Candidates to test (comma list; default: all of thermal, wear, break_in, transient,
-    /// pressure, camber, speed, load, offset)
+    /// pressure, camber, speed, load, offset, specimen)
     #[arg(long)]
     candidates: Option<String>,
     /// Score state effects against the present model plus its form error (the residual other
@@ -139,15 +139,20 @@ pub fn run(args: DoctorArgs) -> Result<()> {
     let dx = diagnose(&ds, &base, &cfg)?;
     let wall = t0.elapsed().as_secs_f64();
     let w = report::write_all(&args.out, &ds, &base, &dx, &base_name, wall)?;
-    if dx.named.is_empty() {
-        println!("no effect named: {}", dx.stop_reason);
+    if dx.state_effects().next().is_none() {
+        println!("no missing effect of the tyre's state named: {}", dx.stop_reason);
     }
     for (i, n) in dx.named.iter().enumerate() {
+        let family = match n.family {
+            doctor::Family::State => "state effect",
+            doctor::Family::FormError => "form error",
+        };
         println!(
-            "{}. {} (evidence {:.3}; runner-up {}): {} RMS in its region {:.4} → {:.4} held-out, {:.4} → {:.4} fit",
+            "{}. {} [{family}] (evidence {:.3}, p {:.4}; runner-up {}): {} RMS in its region {:.4} → {:.4} held-out, {:.4} → {:.4} fit",
             i + 1,
             n.effect.name(),
             n.evidence,
+            n.p_value,
             n.runner_up.map_or("none".to_owned(), |(e, v)| format!("{} {:.3}", e.name(), v)),
             n.channel,
             n.rms_before_heldout,
@@ -155,6 +160,9 @@ pub fn run(args: DoctorArgs) -> Result<()> {
             n.rms_before,
             n.rms_after
         );
+    }
+    for ni in &dx.not_identifiable {
+        println!("{ni}");
     }
     println!("report: {}", w.markdown.display());
     println!("json:   {}", w.json.display());
