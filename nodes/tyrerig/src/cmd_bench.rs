@@ -67,6 +67,9 @@ pub enum BenchCmd {
     /// The adaptive plan (docs/adaptive-plan.md): rig time to accuracy against the true tyre,
     /// beside GS2MF and the Square Matrix, per tyre and seed.
     Adaptive(crate::bench_adaptive::AdaptiveBench),
+    /// The doctor's diagnosis benchmark (docs/doctor-benchmark.md): known effects hidden in
+    /// virtual-rig logs of 3 tyres × 3 plans, diagnosed; confusion, precision, recall, cuts.
+    Doctor(crate::bench_doctor::DoctorBench),
 }
 
 /// Wall clock, ns since the UNIX epoch.
@@ -151,6 +154,9 @@ pub fn run(cmd: BenchCmd) -> anyhow::Result<()> {
     if let BenchCmd::Adaptive(args) = &cmd {
         return crate::bench_adaptive::run(args);
     }
+    if let BenchCmd::Doctor(args) = &cmd {
+        return crate::bench_doctor::run(args);
+    }
     let rt = tokio::runtime::Builder::new_multi_thread().enable_all().build().context("tokio")?;
     let secure = matches!(cmd, BenchCmd::DdsLatency { secure: true, .. } | BenchCmd::Recorder { secure: true, .. });
     let (cfg, _keystore) = bench_config(secure)?;
@@ -159,6 +165,7 @@ pub fn run(cmd: BenchCmd) -> anyhow::Result<()> {
         // Returned above, before the DDS set-up it does not need.
         BenchCmd::LiveFit(args) => crate::bench_livefit::run(&args),
         BenchCmd::Adaptive(args) => crate::bench_adaptive::run(&args),
+        BenchCmd::Doctor(args) => crate::bench_doctor::run(&args),
         BenchCmd::Foxglove { clients, rate_hz, seconds, port } => {
             rt.block_on(crate::bench_foxglove::run(clients, rate_hz, seconds, port))
         }

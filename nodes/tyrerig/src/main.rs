@@ -8,6 +8,7 @@ use clap::{Parser, Subcommand};
 
 // --- subcommand modules (one per capability) ---
 mod bench_adaptive;
+mod bench_doctor;
 mod bench_foxglove;
 mod bench_livefit;
 mod cmd_bench;
@@ -16,6 +17,7 @@ mod cmd_data;
 mod cmd_doctor;
 mod cmd_export_ttc;
 mod cmd_fit;
+mod cmd_inject;
 mod cmd_launch;
 mod cmd_mcap;
 mod cmd_model;
@@ -43,6 +45,8 @@ enum Command {
     Report(Box<cmd_report::ReportArgs>),
     /// Find where model and logs disagree, name the missing effect, add it, show the gap shrink
     Doctor(Box<cmd_doctor::DoctorArgs>),
+    /// Hide known effects (thermal, wear, break-in) in recorded virtual-rig logs, computed by the run's true tyre
+    Inject(Box<cmd_inject::InjectArgs>),
     /// Fit an MF-Tyre 6.1 model (.tir) to GS2MF logs or measured files, staged as in the thesis
     Fit(Box<cmd_fit::FitArgs>),
     /// Export log data (TYDEX, TTC-style .dat) or a measured file's channels (MATLAB .mat)
@@ -86,6 +90,7 @@ fn main() -> anyhow::Result<()> {
         Command::Bench(cmd) => cmd_bench::run(cmd),
         Command::Report(args) => cmd_report::run(*args),
         Command::Doctor(args) => cmd_doctor::run(*args),
+        Command::Inject(args) => cmd_inject::run(*args),
         Command::Fit(args) => cmd_fit::run(*args),
         Command::Export(cmd) => cmd_data::run_export(cmd),
         Command::Import(cmd) => cmd_data::run_import(cmd),
