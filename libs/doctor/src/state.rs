@@ -218,6 +218,9 @@ pub struct Coverage {
     pub radius: bool,
     /// Tyres (logs) in the test.
     pub tyres: usize,
+    /// Constant terms (a level at the reference state): for a given model; a model fitted to
+    /// the same logs already has the level, and a constant would only soak up form error.
+    pub levels: bool,
 }
 
 /// The terms of `effect` the data can determine.
@@ -242,11 +245,12 @@ pub fn terms(effect: Effect, cov: Coverage) -> Vec<Term> {
     let mut out = Vec::new();
     match effect {
         Effect::Thermal => {
+            let first = u8::from(!cov.levels);
             for &f in &grip {
-                out.extend((0..3).map(|b| t(f, b)));
+                out.extend((first..3).map(|b| t(f, b)));
             }
             for &f in &stiff {
-                out.extend((0..2).map(|b| t(f, b)));
+                out.extend((first..2).map(|b| t(f, b)));
             }
             out.extend(moment.iter().chain(&radius).map(|&f| t(f, 1)));
         }
@@ -385,7 +389,7 @@ mod tests {
 
     #[test]
     fn keys_round_trip() {
-        let cov = Coverage { lateral: true, longitudinal: true, radius: true, tyres: 3 };
+        let cov = Coverage { lateral: true, longitudinal: true, radius: true, tyres: 3, levels: true };
         for e in [Effect::Thermal, Effect::Wear, Effect::BreakIn, Effect::Speed, Effect::Specimen] {
             let ts = terms(e, cov);
             assert!(!ts.is_empty(), "{e:?}");
@@ -398,7 +402,7 @@ mod tests {
 
     #[test]
     fn terms_follow_what_the_data_cover() {
-        let lat = Coverage { lateral: true, longitudinal: false, radius: false, tyres: 1 };
+        let lat = Coverage { lateral: true, longitudinal: false, radius: false, tyres: 1, levels: true };
         let wear = terms(Effect::Wear, lat);
         assert!(wear.iter().all(|t| !matches!(t.factor, Factor::MuX | Factor::Kx | Factor::Cx | Factor::Radius)));
         assert!(wear.iter().any(|t| t.factor == Factor::MuY), "wear moves grip too");
