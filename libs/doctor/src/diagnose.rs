@@ -200,10 +200,8 @@ pub struct Diagnosis {
     pub stop_reason: String,
     /// State effects these logs cannot tell from the operating point, each with what to do.
     pub not_identifiable: Vec<String>,
-    /// Reference temperature of the thermal extension [°C].
-    pub t_ref_c: f64,
-    /// Reference speed of the speed extension [m/s].
-    pub v_ref_mps: f64,
+    /// References of the state variables (thermal reference and range, speed reference).
+    pub references: state::References,
     /// Per log, the decay time constant of the laser flash fitted out of the quiet tread
     /// temperatures [s] (`None`: none evident) — see [`crate::flash`].
     pub flash_decay_s: Vec<Option<f64>>,
@@ -476,7 +474,9 @@ impl Ctx<'_> {
                 None => self.meas[k],
             }
         };
-        let choice = Choice::grid(eff)
+        let choice = self
+            .ev
+            .choice_grid(eff)
             .into_iter()
             .map(|c| {
                 let d = linfit::with_candidate(&self.ev, &present, &pterms, eff, c, terms.clone());
@@ -882,8 +882,7 @@ pub fn diagnose(ds: &Dataset, base: &TyreParams, cfg: &DoctorConfig) -> Result<D
         sweeps: ds.sweeps.len(),
         stop_reason,
         not_identifiable,
-        t_ref_c: ctx.ev.t_ref_c,
-        v_ref_mps: ctx.ev.v_ref_mps,
+        references: ctx.ev.references(),
         flash_decay_s: ds.flash_decay_s.clone(),
         not_diagnosed,
         form_correction: cfg.form_correction,

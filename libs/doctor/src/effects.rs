@@ -309,7 +309,7 @@ pub struct Evaluator<'a> {
     pub v_ref_mps: f64,
     /// Severe sliding energy per [`state::BREAK_IN_THRESHOLDS_W`] [J].
     severe: Vec<Vec<f64>>,
-    /// Grip temperature through each of [`state::THERMAL_LAGS_S`] [°C].
+    /// Each of [`state::THERMAL_TEMPERATURES`] over the series [°C].
     lagged_temp: Vec<Vec<f64>>,
     /// The last relaxed slip series by transient parameters: a named transient held fixed is
     /// evaluated again with every prediction, and its recursion runs over every full-rate
@@ -339,8 +339,10 @@ impl<'a> Evaluator<'a> {
         let t_ref_c = if temps.is_empty() { 25.0 } else { temps[temps.len() / 2] };
         let severe = state::BREAK_IN_THRESHOLDS_W.iter().map(|&th| ds.series.severe_energy_j(th)).collect();
         let s = &ds.series;
-        let lagged_temp =
-            state::THERMAL_LAGS_S.iter().map(|&tau| state::lagged(&s.t_s, &s.temp_grip_c, &s.new_tyre, tau)).collect();
+        let lagged_temp = state::THERMAL_TEMPERATURES
+            .iter()
+            .map(|&(source, tau)| state::lagged(&s.t_s, Self::temp_source(ds, source), &s.new_tyre, tau))
+            .collect();
         let v_ref_mps = if base.longvl_mps() > 0.0 { base.longvl_mps() } else { 16.6 };
         Self { ds, base, t_ref_c, v_ref_mps, severe, lagged_temp, relaxed_cache: std::sync::Mutex::new(Vec::new()) }
     }
@@ -348,6 +350,33 @@ impl<'a> Evaluator<'a> {
     /// The references of the state variables.
     pub fn references(&self) -> state::References {
         state::References { t_ref_c: self.t_ref_c, v_ref_mps: self.v_ref_mps }
+    }
+
+    fn temp_source(ds: &Dataset, source: state::TempSource) -> &[f64] {
+        match source {
+            state::TempSource::Grip => &ds.series.temp_grip_c,
+            state::TempSource::Laser => &ds.series.temp_laser_c,
+        }
+    }
+
+    /// The choices tried for `effect`; thermal's with their reference and range from the data
+    /// (the median and the 2 %/98 % quantiles of the temperature over the points).
+    pub fn choice_grid(&self, effect: Effect) -> Vec<state::Choice> {
+        let mut grid = state::Choice::grid(effect);
+        if effect == Effect::Thermal {
+            for c in &mut grid {
+                let (temp, _) = self.choice_series(c);
+                let mut v: Vec<f64> = self.ds.points.iter().map(|&i| temp[i]).filter(|t| t.is_finite()).collect();
+                if v.is_empty() {
+                    continue;
+                }
+                v.sort_by(f64::total_cmp);
+                let q = |p: f64| v[((v.len() - 1) as f64 * p).round() as usize];
+                c.t_ref_c = q(0.5);
+                c.t_range_c = state::THERMAL_RANGE_QUANTILES.map(q);
+            }
+        }
+        grid
     }
 
     /// Relaxed slip angle and slip ratio series for the transient extension:
@@ -404,9 +433,9 @@ impl<'a> Evaluator<'a> {
     fn choice_series(&self, c: &state::Choice) -> (std::borrow::Cow<'_, [f64]>, std::borrow::Cow<'_, [f64]>) {
         use std::borrow::Cow;
         let s = &self.ds.series;
-        let temp = match state::THERMAL_LAGS_S.iter().position(|&l| l == c.lag_s) {
+        let temp = match state::THERMAL_TEMPERATURES.iter().position(|&(src, l)| src == c.source && l == c.lag_s) {
             Some(i) => Cow::Borrowed(self.lagged_temp[i].as_slice()),
-            None => Cow::Owned(state::lagged(&s.t_s, &s.temp_grip_c, &s.new_tyre, c.lag_s)),
+            None => Cow::Owned(state::lagged(&s.t_s, Self::temp_source(self.ds, c.source), &s.new_tyre, c.lag_s)),
         };
         let severe = match state::BREAK_IN_THRESHOLDS_W.iter().position(|&t| t == c.threshold_w) {
             Some(i) => Cow::Borrowed(self.severe[i].as_slice()),
@@ -650,7 +679,7 @@ mod tests {
             (t(Factor::Trail, 1), 0.05),
         ];
         let want: Vec<f64> = truth.iter().map(|x| x.1).collect();
-        let choice = state::Choice { lag_s: 30.0, ..state::Choice::default() };
+        let choice = state::Choice { lag_s: 30.0, t_ref_c: 40.0, ..state::Choice::default() };
         close(&recover_state(Effect::Thermal, choice, &truth), &want, 0.05);
     }
 
@@ -663,7 +692,7 @@ mod tests {
 
     #[test]
     fn break_in_extension_recovers_its_deficit() {
-        let choice = state::Choice { energy_kj: 100.0, threshold_w: 5_000.0, lag_s: 0.0 };
+        let choice = state::Choice { energy_kj: 100.0, threshold_w: 5_000.0, ..state::Choice::default() };
         let truth = [(t(Factor::MuY, 0), -0.12), (t(Factor::Cy, 0), 0.05)];
         let want: Vec<f64> = truth.iter().map(|x| x.1).collect();
         close(&recover_state(Effect::BreakIn, choice, &truth), &want, 0.05);

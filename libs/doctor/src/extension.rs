@@ -6,8 +6,10 @@
 //! $ Added by `tyrerig doctor` (docs/doctor.md). MF-Tyre 6.1 readers ignore this section.
 //! FORMAT_VERSION            = 2
 //! EFFECTS                   = 'thermal,wear'
-//! THERMAL_TREF_C            = 52.3    $ x = (T_grip,lagged − TREF)/10 K
-//! THERMAL_LAG_S             = 30      $ lag of the grip temperature
+//! THERMAL_SOURCE            = 0       $ 0: grip temperature (quiet, flash fitted out); 1: laser mean
+//! THERMAL_LAG_S             = 30      $ its first-order lag
+//! THERMAL_TREF_C            = 52.3    $ x = (T_lagged − TREF)/10 K
+//! THERMAL_TMIN_C, THERMAL_TMAX_C    $ T_lagged clamped to this range (2 %/98 % of the data)
 //! THERMAL_MUY_0, _1, _2 …           $ λμy ×= exp(c0 + c1·x + c2·x²); likewise MUX, KX, KY (c0, c1),
 //!                                   $ TRAIL, MRES (c1), RL_MM (Rl += c1·x mm)
 //! WEAR_MUY, WEAR_KY, WEAR_CY, …     $ λ ×= exp(c·E), E = sliding energy [MJ]; WEAR_RL_MM: Rl += c·E mm
@@ -30,7 +32,7 @@ pub const SECTION: &str = "TYRERIG_EXTENSIONS";
 
 /// Writes `effects` into a copy of `base`: refits into the MF sections, extension terms into
 /// [`SECTION`].
-pub fn extended_params(base: &TyreParams, effects: &[EffectParams], t_ref_c: f64, v_ref_mps: f64) -> TyreParams {
+pub fn extended_params(base: &TyreParams, effects: &[EffectParams], refs: &state::References) -> TyreParams {
     let mut p = base.clone();
     let mut sec = ExtraSection::default();
     sec.lines
@@ -48,8 +50,7 @@ pub fn extended_params(base: &TyreParams, effects: &[EffectParams], t_ref_c: f64
             continue;
         }
         match e.effect {
-            Effect::Thermal => sec.set("THERMAL_TREF_C", TirValue::Number(t_ref_c)),
-            Effect::Speed => sec.set("SPEED_VREF_MPS", TirValue::Number(v_ref_mps)),
+            Effect::Speed => sec.set("SPEED_VREF_MPS", TirValue::Number(refs.v_ref_mps)),
             _ => {}
         }
         for (k, v) in e.keys.iter().zip(&e.values) {
@@ -63,7 +64,8 @@ pub fn extended_params(base: &TyreParams, effects: &[EffectParams], t_ref_c: f64
 /// The state an extended model needs beyond MF-Tyre 6.1's inputs.
 #[derive(Debug, Clone, Copy, Default)]
 pub struct ExtState {
-    /// Grip temperature through the first-order lag `THERMAL_LAG_S` [°C].
+    /// The temperature `THERMAL_SOURCE` names (0: grip temperature, 1: the tread lasers' mean)
+    /// through the first-order lag `THERMAL_LAG_S` [°C].
     pub temp_grip_c: f64,
     /// Sliding energy on the tyre so far [MJ].
     pub sliding_energy_mj: f64,

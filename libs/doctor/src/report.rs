@@ -47,7 +47,7 @@ pub fn extended_model(base: &TyreParams, dx: &Diagnosis) -> Option<TyreParams> {
         return None;
     }
     let effects: Vec<EffectParams> = dx.named.iter().map(|n| n.params.clone()).collect();
-    Some(extended_params(base, &effects, dx.t_ref_c, dx.v_ref_mps))
+    Some(extended_params(base, &effects, &dx.references))
 }
 
 fn score_json(c: &CandidateScore) -> Value {
@@ -118,7 +118,7 @@ pub fn to_json(
             "final_fit": per_ch(dx.rms.final_fit),
             "final_heldout": per_ch(dx.rms.final_heldout),
         },
-        "thermal_reference_temp_c": dx.t_ref_c,
+        "thermal_reference_temp_c": dx.references.t_ref_c,
         "laser_flash_decay_s": dx.flash_decay_s,
         "stop_reason": dx.stop_reason,
         "not_diagnosed": dx.not_diagnosed,
@@ -266,7 +266,7 @@ pub fn markdown(
         m,
         "Grip temperature: quiet tread-laser readings with the flash's decay fitted out (per log: {}); reference {:.1} °C.\n",
         taus.join(", "),
-        dx.t_ref_c
+        dx.references.t_ref_c
     );
     let _ = writeln!(m, "## 2. Find: where the base model disagrees beyond noise\n");
     let flagged: Vec<_> = dx.regions.iter().filter(|b| b.flagged).collect();

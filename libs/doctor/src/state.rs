@@ -102,9 +102,30 @@ pub struct Term {
     pub basis: u8,
 }
 
-/// Lags of the temperature that sets grip tried by `thermal` [s] (0: the grip temperature as
-/// read; longer: towards the tread's bulk, which lags the surface).
-pub const THERMAL_LAGS_S: [f64; 3] = [0.0, 30.0, 120.0];
+/// Temperatures tried by `thermal` as the one that sets grip: the source and its first-order
+/// lag [s]. The grip temperature (quiet laser readings, flash fitted out) as read or lagged
+/// towards the tread's bulk, which lags the surface; and the lasers' plain mean, flash and all,
+/// lagged — a bulk temperature heated by what the surface sees, as a tread's is.
+pub const THERMAL_TEMPERATURES: [(TempSource, f64); 8] = [
+    (TempSource::Grip, 0.0),
+    (TempSource::Grip, 30.0),
+    (TempSource::Grip, 120.0),
+    (TempSource::Laser, 0.0),
+    (TempSource::Laser, 10.0),
+    (TempSource::Laser, 30.0),
+    (TempSource::Laser, 120.0),
+    (TempSource::Laser, 300.0),
+];
+
+/// Which measured temperature a thermal effect reads.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum TempSource {
+    /// The grip temperature: quiet laser readings with the flash fitted out.
+    #[default]
+    Grip,
+    /// The mean of the tread lasers as read (flash included).
+    Laser,
+}
 /// Break-in's severe-energy scales tried [kJ].
 pub const BREAK_IN_ENERGIES_KJ: [f64; 6] = [10.0, 30.0, 100.0, 300.0, 1000.0, 3000.0];
 /// Break-in's power thresholds tried [W].
@@ -112,40 +133,81 @@ pub const BREAK_IN_THRESHOLDS_W: [f64; 4] = [0.0, 5_000.0, 10_000.0, 20_000.0];
 
 /// Key of the thermal lag in the extension section.
 pub const KEY_THERMAL_LAG_S: &str = "THERMAL_LAG_S";
+/// Key of the thermal temperature source (0: grip temperature, 1: laser mean).
+pub const KEY_THERMAL_SOURCE: &str = "THERMAL_SOURCE";
+/// Key of the thermal reference temperature.
+pub const KEY_THERMAL_TREF_C: &str = "THERMAL_TREF_C";
+/// Keys of the range the thermal basis clamps its temperature to.
+pub const KEY_THERMAL_TMIN_C: &str = "THERMAL_TMIN_C";
+/// See [`KEY_THERMAL_TMIN_C`].
+pub const KEY_THERMAL_TMAX_C: &str = "THERMAL_TMAX_C";
 /// Key of break-in's energy scale.
 pub const KEY_BREAKIN_ENERGY_KJ: &str = "BREAKIN_ENERGY_KJ";
 /// Key of break-in's power threshold.
 pub const KEY_BREAKIN_THRESHOLD_KW: &str = "BREAKIN_THRESHOLD_KW";
 
 /// The discrete choice of a state variable's nonlinear knobs.
-#[derive(Debug, Clone, Copy, PartialEq, Default)]
+#[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Choice {
-    /// Thermal: lag of the grip temperature [s].
+    /// Thermal: the temperature read.
+    pub source: TempSource,
+    /// Thermal: its first-order lag [s].
     pub lag_s: f64,
+    /// Thermal: reference temperature (median over the points) [°C].
+    pub t_ref_c: f64,
+    /// Thermal: temperatures beyond this range are taken at its ends [°C] (lo > hi: none). A
+    /// polynomial in temperature fitted on the training sweeps must not extrapolate into the
+    /// hottest or coldest held-out sweep: that made a held-out fold's χ² grow twofold on an
+    /// independently generated log.
+    pub t_range_c: [f64; 2],
     /// Break-in: severe-energy scale [kJ].
     pub energy_kj: f64,
     /// Break-in: power threshold [W].
     pub threshold_w: f64,
 }
 
+impl Default for Choice {
+    fn default() -> Self {
+        Self {
+            source: TempSource::Grip,
+            lag_s: 0.0,
+            t_ref_c: 0.0,
+            t_range_c: [f64::INFINITY, f64::NEG_INFINITY],
+            energy_kj: 0.0,
+            threshold_w: 0.0,
+        }
+    }
+}
+
+/// Quantiles of the thermal temperature over the points that bound the thermal basis.
+pub const THERMAL_RANGE_QUANTILES: [f64; 2] = [0.02, 0.98];
+
 impl Choice {
     /// Knobs counted as parameters (each discrete choice made on the data).
     pub fn n_knobs(effect: Effect) -> usize {
         match effect {
-            Effect::Thermal => 1,
+            Effect::Thermal => 2,
             Effect::BreakIn => 2,
             _ => 0,
         }
     }
 
-    /// The choices tried for `effect`.
+    /// The choices tried for `effect` (thermal's need the data: see
+    /// [`crate::effects::Evaluator::choice_grid`]).
     pub fn grid(effect: Effect) -> Vec<Choice> {
         match effect {
-            Effect::Thermal => THERMAL_LAGS_S.iter().map(|&lag_s| Choice { lag_s, ..Choice::default() }).collect(),
+            Effect::Thermal => THERMAL_TEMPERATURES
+                .iter()
+                .map(|&(source, lag_s)| Choice { source, lag_s, ..Choice::default() })
+                .collect(),
             Effect::BreakIn => BREAK_IN_THRESHOLDS_W
                 .iter()
                 .flat_map(|&threshold_w| {
-                    BREAK_IN_ENERGIES_KJ.iter().map(move |&energy_kj| Choice { energy_kj, threshold_w, lag_s: 0.0 })
+                    BREAK_IN_ENERGIES_KJ.iter().map(move |&energy_kj| Choice {
+                        energy_kj,
+                        threshold_w,
+                        ..Choice::default()
+                    })
                 })
                 .collect(),
             _ => vec![Choice::default()],
@@ -155,7 +217,13 @@ impl Choice {
     /// The choice as extension keys and values.
     pub fn entries(&self, effect: Effect) -> Vec<(String, f64)> {
         match effect {
-            Effect::Thermal => vec![(KEY_THERMAL_LAG_S.to_owned(), self.lag_s)],
+            Effect::Thermal => vec![
+                (KEY_THERMAL_SOURCE.to_owned(), f64::from(u8::from(self.source == TempSource::Laser))),
+                (KEY_THERMAL_LAG_S.to_owned(), self.lag_s),
+                (KEY_THERMAL_TREF_C.to_owned(), self.t_ref_c),
+                (KEY_THERMAL_TMIN_C.to_owned(), self.t_range_c[0]),
+                (KEY_THERMAL_TMAX_C.to_owned(), self.t_range_c[1]),
+            ],
             Effect::BreakIn => vec![
                 (KEY_BREAKIN_ENERGY_KJ.to_owned(), self.energy_kj),
                 (KEY_BREAKIN_THRESHOLD_KW.to_owned(), self.threshold_w * 1e-3),
@@ -274,7 +342,7 @@ pub fn terms(effect: Effect, cov: Coverage) -> Vec<Term> {
 /// The state a state effect's basis reads at one sample.
 #[derive(Debug, Clone, Copy, Default)]
 pub struct StateAt {
-    /// Grip temperature through the effect's lag [°C].
+    /// The thermal effect's temperature (its source through its lag) [°C].
     pub temp_c: f64,
     /// Sliding energy on this tyre so far [MJ].
     pub energy_mj: f64,
@@ -286,10 +354,10 @@ pub struct StateAt {
     pub tyre: usize,
 }
 
-/// Reference points of the state variables.
-#[derive(Debug, Clone, Copy)]
+/// Reference points of the state variables the choice does not carry.
+#[derive(Debug, Clone, Copy, serde::Serialize)]
 pub struct References {
-    /// Thermal reference temperature [°C].
+    /// Median grip temperature over the points [°C] (for the report).
     pub t_ref_c: f64,
     /// Speed reference [m/s].
     pub v_ref_mps: f64,
@@ -299,7 +367,9 @@ pub struct References {
 pub fn basis(effect: Effect, basis: u8, st: &StateAt, choice: &Choice, refs: &References) -> f64 {
     match effect {
         Effect::Thermal => {
-            let x = if st.temp_c.is_finite() { (st.temp_c - refs.t_ref_c) / 10.0 } else { 0.0 };
+            let [lo, hi] = choice.t_range_c;
+            let t = if lo <= hi { st.temp_c.clamp(lo, hi) } else { st.temp_c };
+            let x = if t.is_finite() { (t - choice.t_ref_c) / 10.0 } else { 0.0 };
             x.powi(i32::from(basis))
         }
         Effect::Wear => st.energy_mj,
@@ -328,6 +398,14 @@ impl Parsed {
         for (k, v) in entries {
             if k.eq_ignore_ascii_case(KEY_THERMAL_LAG_S) {
                 out.choice.lag_s = v;
+            } else if k.eq_ignore_ascii_case(KEY_THERMAL_SOURCE) {
+                out.choice.source = if v >= 0.5 { TempSource::Laser } else { TempSource::Grip };
+            } else if k.eq_ignore_ascii_case(KEY_THERMAL_TREF_C) {
+                out.choice.t_ref_c = v;
+            } else if k.eq_ignore_ascii_case(KEY_THERMAL_TMIN_C) {
+                out.choice.t_range_c[0] = v;
+            } else if k.eq_ignore_ascii_case(KEY_THERMAL_TMAX_C) {
+                out.choice.t_range_c[1] = v;
             } else if k.eq_ignore_ascii_case(KEY_BREAKIN_ENERGY_KJ) {
                 out.choice.energy_kj = v;
             } else if k.eq_ignore_ascii_case(KEY_BREAKIN_THRESHOLD_KW) {
