@@ -371,9 +371,9 @@ impl<'a> Evaluator<'a> {
                     continue;
                 }
                 v.sort_by(f64::total_cmp);
-                let q = |p: f64| v[((v.len() - 1) as f64 * p).round() as usize];
-                c.t_ref_c = q(0.5);
-                c.t_range_c = state::THERMAL_RANGE_QUANTILES.map(q);
+                let at = |p: f64| v[((v.len() - 1) as f64 * p).round() as usize];
+                c.t_ref_c = at(0.5);
+                c.t_range_c = [at(state::THERMAL_RANGE_QUANTILES[0]), at(state::THERMAL_RANGE_QUANTILES[1])];
             }
         }
         grid

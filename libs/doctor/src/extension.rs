@@ -49,9 +49,8 @@ pub fn extended_params(base: &TyreParams, effects: &[EffectParams], refs: &state
             sec.set(&format!("REFIT_{}", e.effect.name().to_ascii_uppercase()), TirValue::Text(e.keys.join(",")));
             continue;
         }
-        match e.effect {
-            Effect::Speed => sec.set("SPEED_VREF_MPS", TirValue::Number(refs.v_ref_mps)),
-            _ => {}
+        if e.effect == Effect::Speed {
+            sec.set("SPEED_VREF_MPS", TirValue::Number(refs.v_ref_mps));
         }
         for (k, v) in e.keys.iter().zip(&e.values) {
             sec.set(k, TirValue::Number(*v));
