@@ -303,14 +303,10 @@ fn bootstrap_p(per_sweep_gain: &[f64], penalty: f64, resamples: usize, seed: u64
     if n == 0 || resamples == 0 {
         return 1.0;
     }
-    let mut rng = seed ^ 0x9e37_79b9_7f4a_7c15;
+    let mut counter = seed.wrapping_mul(0x9e37_79b9_7f4a_7c15);
     let mut next = || {
-        // splitmix64: deterministic, so a diagnosis is reproducible.
-        rng = rng.wrapping_add(0x9e37_79b9_7f4a_7c15);
-        let mut z = rng;
-        z = (z ^ (z >> 30)).wrapping_mul(0xbf58_476d_1ce4_e5b9);
-        z = (z ^ (z >> 27)).wrapping_mul(0x94d0_49bb_1331_11eb);
-        z ^ (z >> 31)
+        counter = counter.wrapping_add(0x9e37_79b9_7f4a_7c15);
+        crate::fit::splitmix64(counter)
     };
     let mut fail = 0usize;
     for _ in 0..resamples {

@@ -187,19 +187,22 @@ pub fn folds(ev: &Evaluator<'_>, k: usize) -> Vec<Vec<usize>> {
 /// Fold of each of `n` sweeps: ordinals sorted by a 64-bit mix of the ordinal (splitmix64's
 /// finaliser), then dealt round-robin into `k` folds.
 fn sweep_folds(n: usize, k: usize) -> Vec<usize> {
-    let mix = |x: u64| {
-        let mut z = x.wrapping_add(0x9e37_79b9_7f4a_7c15);
-        z = (z ^ (z >> 30)).wrapping_mul(0xbf58_476d_1ce4_e5b9);
-        z = (z ^ (z >> 27)).wrapping_mul(0x94d0_49bb_1331_11eb);
-        z ^ (z >> 31)
-    };
     let mut order: Vec<usize> = (0..n).collect();
-    order.sort_by_key(|&i| mix(i as u64));
+    order.sort_by_key(|&i| splitmix64(i as u64));
     let mut fold_of = vec![0; n];
     for (pos, &sw) in order.iter().enumerate() {
         fold_of[sw] = pos % k;
     }
     fold_of
+}
+
+/// splitmix64's step and finaliser: a fixed, well-mixed pseudo-random sequence, so that a
+/// diagnosis (its folds, its bootstrap) is reproducible.
+pub(crate) fn splitmix64(x: u64) -> u64 {
+    let mut z = x.wrapping_add(0x9e37_79b9_7f4a_7c15);
+    z = (z ^ (z >> 30)).wrapping_mul(0xbf58_476d_1ce4_e5b9);
+    z = (z ^ (z >> 27)).wrapping_mul(0x94d0_49bb_1331_11eb);
+    z ^ (z >> 31)
 }
 
 /// Cross-validated predictions: every point predicted by the fit that did not see its sweep.
