@@ -534,6 +534,14 @@ impl Ctx<'_> {
     }
 }
 
+/// Smallest growth of a channel's held-out RMS that counts as harm [N, N, N·m, m], beside the
+/// χ² test: below its resolution a channel is not made worse in any sense a user could see.
+/// The loaded radius needs it most: its noise floor is the 0.1 mm quantisation's, and MF-Tyre's
+/// loaded radius follows the forces, so a grip change moves it by hundredths of a millimetre;
+/// on a log whose radius did not follow (forces changed alone) every candidate was rejected for
+/// a held-out DSTWOWHC RMS growing 0.029 → 0.042 mm.
+const HARM_RESOLUTION: [f64; 4] = [2.0, 2.0, 0.2, 0.05e-3];
+
 /// A candidate accepted into the model.
 struct Accepted {
     named: NamedEffect,
@@ -600,7 +608,12 @@ impl Ctx<'_> {
         let ca = chi2(meas, &fit.pred_ho, sigma, &self.all);
         let n_ch: [f64; 4] =
             std::array::from_fn(|c| self.all.iter().filter(|&&k| meas[k][c].is_finite()).count() as f64);
-        let harmed = |c: usize| ca[c] - cb[c] > self.cfg.harm_tolerance * cb[c] + 3.0 * (2.0 * n_ch[c]).sqrt();
+        let rms_b: [f64; 4] = std::array::from_fn(|c| rms_of(meas, &before_ho_c, c, &self.all));
+        let rms_a: [f64; 4] = std::array::from_fn(|c| rms_of(meas, &fit.pred_ho, c, &self.all));
+        let harmed = |c: usize| {
+            ca[c] - cb[c] > self.cfg.harm_tolerance * cb[c] + 3.0 * (2.0 * n_ch[c]).sqrt()
+                && rms_a[c] - rms_b[c] > HARM_RESOLUTION[c]
+        };
         if let Some(worse) = (0..4).find(|&c| cb[c] > 0.0 && harmed(c)) {
             return Err(format!(
                 "rejected: held-out {} worse with it (χ² {:.0} → {:.0}, RMS {:.4} → {:.4})",
