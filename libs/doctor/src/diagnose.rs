@@ -472,7 +472,7 @@ impl Ctx<'_> {
         };
         let choice = self
             .ev
-            .choice_grid(eff)
+            .choice_grid(eff, self.cfg.form_correction)
             .into_iter()
             .map(|c| {
                 let d = linfit::with_candidate(&self.ev, &present, &pterms, eff, c, terms.clone());
@@ -777,9 +777,7 @@ pub fn diagnose(ds: &Dataset, base: &TyreParams, cfg: &DoctorConfig) -> Result<D
         longitudinal: ds.has_longitudinal(),
         radius: meas.iter().any(|m| m[CH_RL].is_finite()),
         tyres: ds.points.iter().map(|&i| ds.series.tyre[i]).max().map_or(0, |m| m + 1),
-        // Levels kept with a fitted base too: on the brush race tyre's lateral log they make the
-        // difference between a 46 % and a 54 % cut in the thermal region (measured).
-        levels: true,
+        levels: !cfg.form_correction,
     };
     let bandwidths = Bandwidths::from_data(ds);
     let regions = find_regions(ds, &meas, &base_pred, &sigma);

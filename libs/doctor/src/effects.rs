@@ -360,9 +360,20 @@ impl<'a> Evaluator<'a> {
     }
 
     /// The choices tried for `effect`; thermal's with their reference and range from the data
-    /// (the median and the 2 %/98 % quantiles of the temperature over the points).
-    pub fn choice_grid(&self, effect: Effect) -> Vec<state::Choice> {
+    /// (the median and the 2 %/98 % quantiles of the temperature over the points); `centred`:
+    /// wear's and break-in's neutral state at their mean over the points (a base fitted to
+    /// these logs, see [`state::Choice::neutral`]).
+    pub fn choice_grid(&self, effect: Effect, centred: bool) -> Vec<state::Choice> {
         let mut grid = state::Choice::grid(effect);
+        if centred && matches!(effect, Effect::Wear | Effect::BreakIn) {
+            for c in &mut grid {
+                let b = self.basis_at_points(effect, 0, c);
+                let valid: Vec<f64> = b.into_iter().filter(|v| v.is_finite()).collect();
+                if !valid.is_empty() {
+                    c.neutral = valid.iter().sum::<f64>() / valid.len() as f64;
+                }
+            }
+        }
         if effect == Effect::Thermal {
             for c in &mut grid {
                 let (temp, _) = self.choice_series(c);

@@ -145,6 +145,10 @@ pub const KEY_THERMAL_TMAX_C: &str = "THERMAL_TMAX_C";
 pub const KEY_BREAKIN_ENERGY_KJ: &str = "BREAKIN_ENERGY_KJ";
 /// Key of break-in's power threshold.
 pub const KEY_BREAKIN_THRESHOLD_KW: &str = "BREAKIN_THRESHOLD_KW";
+/// Key of the sliding energy at which wear is neutral [MJ] (see [`Choice::neutral`]).
+pub const KEY_WEAR_NEUTRAL_MJ: &str = "WEAR_NEUTRAL_MJ";
+/// Key of the break-in basis value at which break-in is neutral (see [`Choice::neutral`]).
+pub const KEY_BREAKIN_NEUTRAL: &str = "BREAKIN_NEUTRAL";
 
 /// The discrete choice of a state variable's nonlinear knobs.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -164,6 +168,12 @@ pub struct Choice {
     pub energy_kj: f64,
     /// Break-in: power threshold [W].
     pub threshold_w: f64,
+    /// Wear and break-in: the basis value at which the effect is neutral (the model's own
+    /// state). 0 for a given model (it is the new tyre's); the mean over the points for a base
+    /// fitted to the same logs, which already holds the average state: measured from zero,
+    /// wear's radius term had to undo half the log's tread loss before it could follow it, and
+    /// a thermal basis (centred on its median) took the wear's place (benchmark, brush road).
+    pub neutral: f64,
 }
 
 impl Default for Choice {
@@ -175,6 +185,7 @@ impl Default for Choice {
             t_range_c: [f64::INFINITY, f64::NEG_INFINITY],
             energy_kj: 0.0,
             threshold_w: 0.0,
+            neutral: 0.0,
         }
     }
 }
@@ -227,7 +238,9 @@ impl Choice {
             Effect::BreakIn => vec![
                 (KEY_BREAKIN_ENERGY_KJ.to_owned(), self.energy_kj),
                 (KEY_BREAKIN_THRESHOLD_KW.to_owned(), self.threshold_w * 1e-3),
+                (KEY_BREAKIN_NEUTRAL.to_owned(), self.neutral),
             ],
+            Effect::Wear => vec![(KEY_WEAR_NEUTRAL_MJ.to_owned(), self.neutral)],
             _ => vec![],
         }
     }
@@ -287,7 +300,9 @@ pub struct Coverage {
     /// Tyres (logs) in the test.
     pub tyres: usize,
     /// Constant terms (a level at the reference state): for a given model; a model fitted to
-    /// the same logs already has the level, and a constant would only soak up form error.
+    /// the same logs already has the level (there wear and break-in are centred instead, see
+    /// [`Choice::neutral`]), and a constant would only soak up the base fit's own misfit — in
+    /// favour of whichever candidate has one.
     pub levels: bool,
 }
 
@@ -317,10 +332,12 @@ pub fn terms(effect: Effect, cov: Coverage) -> Vec<Term> {
             for &f in &grip {
                 out.extend((first..3).map(|b| t(f, b)));
             }
-            for &f in &stiff {
+            // Every factor gets its level with a given model: the tyre at the log's median
+            // temperature need not be the model's (a thermal radius growth measured from the
+            // cold tyre was beyond a centred radius term, and wear took its place).
+            for &f in stiff.iter().chain(&moment).chain(&radius) {
                 out.extend((first..2).map(|b| t(f, b)));
             }
-            out.extend(moment.iter().chain(&radius).map(|&f| t(f, 1)));
         }
         Effect::Wear => {
             out.extend(grip.iter().chain(&stiff).chain(&shape).chain(&moment).chain(&radius).map(|&f| t(f, 0)));
@@ -376,8 +393,8 @@ pub fn basis(effect: Effect, basis: u8, st: &StateAt, choice: &Choice, refs: &Re
             let x = if t.is_finite() { (t - choice.t_ref_c) / 10.0 } else { 0.0 };
             x.powi(i32::from(basis))
         }
-        Effect::Wear => st.energy_mj,
-        Effect::BreakIn => (-st.severe_kj / choice.energy_kj.max(1e-3)).exp(),
+        Effect::Wear => st.energy_mj - choice.neutral,
+        Effect::BreakIn => (-st.severe_kj / choice.energy_kj.max(1e-3)).exp() - choice.neutral,
         Effect::Speed => (st.speed_mps - refs.v_ref_mps) / refs.v_ref_mps.max(0.1),
         Effect::Specimen => f64::from(u8::from(st.tyre == usize::from(basis))),
         _ => 0.0,
@@ -414,6 +431,8 @@ impl Parsed {
                 out.choice.energy_kj = v;
             } else if k.eq_ignore_ascii_case(KEY_BREAKIN_THRESHOLD_KW) {
                 out.choice.threshold_w = v * 1e3;
+            } else if k.eq_ignore_ascii_case(KEY_WEAR_NEUTRAL_MJ) || k.eq_ignore_ascii_case(KEY_BREAKIN_NEUTRAL) {
+                out.choice.neutral = v;
             } else if let Some(t) = parse_term(effect, &k.to_ascii_uppercase()) {
                 out.terms.push((t, v));
             }
