@@ -21,6 +21,9 @@ pub struct TextTable {
     pub lines: Vec<usize>,
     /// What was odd about the file.
     pub warnings: Vec<Warning>,
+    /// Lines after the units that did not become rows, per reason (blank lines not counted):
+    /// `inspect` accounts for them besides the rows.
+    pub lines_not_read: Vec<(String, usize)>,
 }
 
 /// Fields of a line: tab-separated when the line has tabs (the TTC layout), else separated by
@@ -162,6 +165,11 @@ pub fn parse_dat(bytes: &[u8], file: &str) -> Result<TextTable, ReadError> {
     let mut cols: Vec<Vec<f64>> = (0..n).map(|_| Vec::with_capacity(cap)).collect();
     let mut row_lines = Vec::with_capacity(cap);
     let mut trailing_tabs = 0usize;
+    let mut not_read: Vec<(String, usize)> = Vec::new();
+    let mut skip = |why: &str| match not_read.iter_mut().find(|(w, _)| w == why) {
+        Some((_, n)) => *n += 1,
+        None => not_read.push((why.to_owned(), 1)),
+    };
     let mut first_trailing = 0usize;
     for (idx, &(ln, line)) in lines.iter().enumerate().skip(data_from) {
         if line.trim().is_empty() {
@@ -180,6 +188,7 @@ pub fn parse_dat(bytes: &[u8], file: &str) -> Result<TextTable, ReadError> {
         }
         if !f.iter().any(|s| is_number(s)) {
             warn.push("not data", Place::line(file, ln), format!("not a row of numbers (`{}`): skipped", clip(line)));
+            skip("not a row of numbers");
             continue;
         }
         if f.len() < n {
@@ -189,12 +198,14 @@ pub fn parse_dat(bytes: &[u8], file: &str) -> Result<TextTable, ReadError> {
                     Place::line(file, ln).channel(&names[f.len()]),
                     format!("last line cut short ({} of {n} values): dropped", f.len()),
                 );
+                skip("last line cut short");
             } else {
                 warn.push(
                     "missing values",
                     Place::line(file, ln).channel(&names[f.len()]),
                     format!("{} of {n} values (missing from this channel on): row dropped", f.len()),
                 );
+                skip("values missing");
             }
             continue;
         }
@@ -239,7 +250,7 @@ pub fn parse_dat(bytes: &[u8], file: &str) -> Result<TextTable, ReadError> {
     for ((name, unit), values) in names.into_iter().zip(units).zip(cols) {
         table.columns.push(crate::table::Column { name, unit, values });
     }
-    Ok(TextTable { table, lines: row_lines, warnings: warn.finish(file) })
+    Ok(TextTable { table, lines: row_lines, warnings: warn.finish(file), lines_not_read: not_read })
 }
 
 /// `Tire_Name=…` from a TIRF title line (`…; Tire_Name=Hoosier 16.0X7.5-10, R20, C2000; …`).

@@ -9,10 +9,15 @@ use std::path::{Path, PathBuf};
 
 use mffit::{Cell, DataKind, Dataset, Origin, Procedure, Sample, Segment, SweepKind};
 
+use crate::conditioning::{same_cell, typical_reach};
 use crate::error::{Place, ReadError, Warning, Warnings};
 use crate::inspect::{CellRow, FileReport, Inspection, SweepRow};
 use crate::interpret::{Convention, Family, KappaSource, interpret};
-use crate::sweeps::{FoundSweep, SweepOptions, TestKind, find_sweeps};
+use crate::sweeps::{Conditioning, FoundSweep, SweepOptions, Swept, TestKind, find_sweeps};
+
+/// The segment section (and inspection kind) of camber sweeps; they are free-rolling data the
+/// fitter takes as cornering data, told apart from slip-angle sweeps by this name.
+pub const CAMBER_SECTION: &str = "camber";
 use crate::table::ChannelTable;
 use crate::{dat, mat, tydex};
 
@@ -122,60 +127,78 @@ fn read_file_unlabelled(path: &Path, opt: &ReadOptions) -> Result<(Dataset, File
 /// file's table of sweeps per cell. Segments without a cell (tyrerig's own TYDEX) are left as
 /// they are.
 fn label(d: &mut Dataset, ins: &mut Inspection, fraction: f64) {
+    // Rows and segments are in the same order, file by file.
+    let leading: Vec<bool> = ins
+        .files
+        .iter()
+        .flat_map(|f| &f.sweeps)
+        .map(|r| r.conditioning_reason.as_deref() == Some(Conditioning::LeadingRepeat.name()))
+        .collect();
+    let camber = |s: &Segment| s.section == CAMBER_SECTION;
     for sa in [true, false] {
-        let fam = |s: &Segment| s.cell.is_some_and(|c| (c.kind == SweepKind::Cornering) == sa);
-        let mut reach: Vec<f64> =
+        let fam = |s: &Segment| !camber(s) && s.cell.is_some_and(|c| (c.kind == SweepKind::Cornering) == sa);
+        let reach: Vec<f64> =
             d.segments.iter().filter(|s| fam(s)).filter_map(|s| s.cell.map(|c| c.slip_reach)).collect();
-        if reach.len() < 2 {
+        let Some(typical) = typical_reach(reach) else { continue };
+        for (k, s) in d.segments.iter_mut().enumerate().filter(|(_, s)| fam(s)) {
+            let short = s.cell.is_some_and(|c| c.slip_reach < fraction * typical);
+            let lead = leading.get(k).copied().unwrap_or(false);
+            s.kind = if short || lead { DataKind::WarmUp } else { DataKind::Sweep };
+        }
+    }
+    let mut segs_reason = d.segments.iter();
+    for row in ins.files.iter_mut().flat_map(|f| f.sweeps.iter_mut()) {
+        let Some(seg) = segs_reason.next() else { break };
+        if seg.cell.is_none() {
             continue;
         }
-        reach.sort_by(f64::total_cmp);
-        let typical = reach[(reach.len() - 1) * 3 / 4];
-        for s in d.segments.iter_mut().filter(|s| fam(s)) {
-            let cond = s.cell.is_some_and(|c| c.slip_reach < fraction * typical);
-            s.kind = if cond { DataKind::WarmUp } else { DataKind::Sweep };
-        }
+        row.conditioning_reason = match (seg.kind == DataKind::WarmUp, row.conditioning_reason.take()) {
+            (false, _) => None,
+            (true, Some(r)) => Some(r),
+            (true, None) => Some(Conditioning::ShortReach.name().to_owned()),
+        };
     }
     let speeds: Vec<f64> = d.segments.iter().filter_map(|s| s.cell.map(|c| c.vx_mps)).collect();
     let speeds_differ = speeds.iter().copied().fold(f64::NEG_INFINITY, f64::max)
         - speeds.iter().copied().fold(f64::INFINITY, f64::min)
         > 1.0;
-    let mut groups: Vec<(Cell, bool, usize)> = Vec::new();
+    let mut groups: Vec<(Cell, bool, bool, usize)> = Vec::new();
     let mut segs = d.segments.iter_mut();
     for f in &mut ins.files {
-        let mut cells: Vec<(Cell, usize)> = Vec::new();
+        let mut cells: Vec<(Cell, bool, usize)> = Vec::new();
         for row in &mut f.sweeps {
             let Some(seg) = segs.next() else { break };
             let Some(cell) = seg.cell else { continue };
             let cond = seg.kind == DataKind::WarmUp;
-            let k = match groups.iter_mut().find(|(c, cd, _)| *cd == cond && same_cell(c, &cell)) {
+            let cam = seg.section == CAMBER_SECTION;
+            let k = match groups.iter_mut().find(|(c, cd, cm, _)| *cd == cond && *cm == cam && same_cell(c, &cell)) {
                 Some(g) => {
-                    g.2 += 1;
-                    *g
+                    g.3 += 1;
+                    (g.0, g.3)
                 }
                 None => {
-                    groups.push((cell, cond, 1));
-                    (cell, cond, 1)
+                    groups.push((cell, cond, cam, 1));
+                    (cell, 1)
                 }
             };
-            let label = cell_label(&k.0, speeds_differ);
+            let label = if cam { camber_label(&k.0, speeds_differ) } else { cell_label(&k.0, speeds_differ) };
             seg.sweep =
-                if cond { format!("warmup (conditioning) {label} #{}", k.2) } else { format!("{label} #{}", k.2) };
+                if cond { format!("warmup (conditioning) {label} #{}", k.1) } else { format!("{label} #{}", k.1) };
             row.name = seg.sweep.clone();
             row.conditioning = cond;
             if !cond {
-                match cells.iter_mut().find(|(c, _)| same_cell(c, &k.0)) {
-                    Some(c) => c.1 += 1,
-                    None => cells.push((k.0, 1)),
+                match cells.iter_mut().find(|(c, cm, _)| *cm == cam && same_cell(c, &k.0)) {
+                    Some(c) => c.2 += 1,
+                    None => cells.push((k.0, cam, 1)),
                 }
             }
         }
         {
             f.cells = cells
                 .iter()
-                .map(|(c, k)| CellRow {
-                    label: cell_label(c, speeds_differ),
-                    kind: c.kind.name().into(),
+                .map(|(c, cam, k)| CellRow {
+                    label: if *cam { camber_label(c, speeds_differ) } else { cell_label(c, speeds_differ) },
+                    kind: if *cam { CAMBER_SECTION.into() } else { c.kind.name().into() },
                     p_kpa: c.p_pa / 1e3,
                     fz_n: c.fz_n,
                     ia_deg: c.gamma_rad.to_degrees(),
@@ -214,7 +237,8 @@ fn read_unlabelled(
         FileFormat::Dat => {
             let t = dat::parse_dat(bytes, file)?;
             let lines = t.lines;
-            from_table(
+            let not_read = t.lines_not_read;
+            let (d, mut report) = from_table(
                 &t.table,
                 "TTC ASCII (.dat)",
                 None,
@@ -223,7 +247,9 @@ fn read_unlabelled(
                 &|r| lines.get(r).copied().unwrap_or(r + 1),
                 opt,
                 None,
-            )
+            )?;
+            report.lines_not_read = not_read;
+            Ok((d, report))
         }
         FileFormat::Mat => {
             let m = mat::parse_mat(bytes, file)?;
@@ -306,15 +332,18 @@ pub fn cell_label(c: &Cell, with_speed: bool) -> String {
     s
 }
 
-/// Two sweeps were run at the same cell (within what a rig holds between repeats).
-fn same_cell(a: &Cell, b: &Cell) -> bool {
-    let near = |x: f64, y: f64, tol: f64| (x - y).abs() <= tol || (x.is_nan() && y.is_nan());
-    a.kind == b.kind
-        && near(a.fz_n, b.fz_n, (0.05 * a.fz_n.abs()).max(50.0))
-        && near(a.p_pa, b.p_pa, 5_000.0)
-        && near(a.gamma_rad, b.gamma_rad, 0.5_f64.to_radians())
-        && near(a.alpha_rad, b.alpha_rad, 0.5_f64.to_radians())
-        && near(a.vx_mps, b.vx_mps, 1.0)
+/// The name of a camber sweep's cell: `camber P83kPa FZ1100N SA1.8`.
+pub fn camber_label(c: &Cell, with_speed: bool) -> String {
+    let mut s = format!(
+        "{CAMBER_SECTION} P{:.0}kPa FZ{:.0}N SA{}",
+        c.p_pa / 1e3,
+        (c.fz_n / 10.0).round() * 10.0,
+        deg(c.alpha_rad)
+    );
+    if with_speed && c.vx_mps.is_finite() {
+        s.push_str(&format!(" V{:.0}kph", c.vx_mps * 3.6));
+    }
+    s
 }
 
 #[allow(clippy::too_many_arguments)]
@@ -368,10 +397,12 @@ fn from_table(
     let mut segments = Vec::with_capacity(seg.sweeps.len());
     let mut rows_sw = Vec::with_capacity(seg.sweeps.len());
     for w in &seg.sweeps {
+        let camber = w.swept == Swept::Camber;
         rows_sw.push(SweepRow {
             name: String::new(),
-            kind: w.cell.kind.name().into(),
-            conditioning: w.conditioning,
+            kind: if camber { CAMBER_SECTION.into() } else { w.cell.kind.name().into() },
+            conditioning: w.conditioning.is_some(),
+            conditioning_reason: w.conditioning.map(|c| c.name().to_owned()),
             first_row: line_of(w.first),
             last_row: line_of(w.last),
             rows: w.last + 1 - w.first,
@@ -380,12 +411,16 @@ fn from_table(
             ia_deg: w.cell.gamma_rad.to_degrees(),
             sa_deg: w.cell.alpha_rad.to_degrees(),
             v_kph: w.cell.vx_mps * 3.6,
-            reach: if w.cell.kind == SweepKind::Cornering { w.cell.slip_reach.to_degrees() } else { w.cell.slip_reach },
+            reach: match w.swept {
+                Swept::SlipAngle => w.cell.slip_reach.to_degrees(),
+                Swept::Camber => w.camber_span_deg,
+                Swept::SlipRatio => w.cell.slip_reach,
+            },
         });
         segments.push(Segment {
             procedure: if w.cell.kind == SweepKind::Cornering { Procedure::FreeRolling } else { Procedure::BrkDrv },
-            kind: if w.conditioning { DataKind::WarmUp } else { DataKind::Sweep },
-            section: w.cell.kind.name().to_owned(),
+            kind: if w.conditioning.is_some() { DataKind::WarmUp } else { DataKind::Sweep },
+            section: if camber { CAMBER_SECTION.to_owned() } else { w.cell.kind.name().to_owned() },
             sweep: String::new(),
             samples: samples_of(s, w, it.kappa_source),
             cell: Some(w.cell),
@@ -425,6 +460,7 @@ fn from_table(
         rows_in_sweeps: 0,
         rows_in_conditioning: 0,
         excluded: seg.excluded.iter().map(|(e, c)| (e.name().to_owned(), *c)).collect(),
+        lines_not_read: Vec::new(),
         warnings,
     };
     let dataset = Dataset { segments, fnomin_n: fnomin, sources: vec![file] };

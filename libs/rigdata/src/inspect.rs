@@ -17,6 +17,9 @@ pub struct SweepRow {
     pub kind: String,
     /// A conditioning (warm-up) sweep, not fitted.
     pub conditioning: bool,
+    /// Why it is a conditioning sweep (`short reach`, `leading sweeps at a cell swept again
+    /// later`).
+    pub conditioning_reason: Option<String>,
     /// First line (text files) or row (1-based, `.mat`).
     pub first_row: usize,
     /// Last line or row.
@@ -33,7 +36,8 @@ pub struct SweepRow {
     pub sa_deg: f64,
     /// Median road speed, kph.
     pub v_kph: f64,
-    /// Largest |slip| reached: deg for cornering, slip ratio otherwise.
+    /// Largest |slip| reached: deg for cornering, slip ratio for slip-ratio sweeps; for camber
+    /// sweeps the camber spanned, deg.
     pub reach: f64,
 }
 
@@ -101,6 +105,8 @@ pub struct FileReport {
     pub rows_in_conditioning: usize,
     /// Rows excluded per reason.
     pub excluded: Vec<(String, usize)>,
+    /// Lines of a text file that did not become rows, per reason (see the warnings for where).
+    pub lines_not_read: Vec<(String, usize)>,
     /// Warnings.
     pub warnings: Vec<Warning>,
 }
@@ -113,7 +119,13 @@ pub struct Inspection {
 }
 
 impl Inspection {
-    /// Sweeps found (conditioning ones not counted), per kind, over all files.
+    /// Camber sweeps found (conditioning ones not counted), over all files.
+    pub fn camber_sweeps(&self) -> usize {
+        self.files.iter().flat_map(|f| &f.sweeps).filter(|s| !s.conditioning && s.kind == "camber").count()
+    }
+
+    /// Sweeps found (conditioning ones not counted), per kind (cornering, drive/brake,
+    /// combined), over all files; camber sweeps in [`Inspection::camber_sweeps`].
     pub fn sweep_counts(&self) -> (usize, usize, usize) {
         let mut c = (0, 0, 0);
         for s in self.files.iter().flat_map(|f| &f.sweeps).filter(|s| !s.conditioning) {
@@ -135,7 +147,12 @@ impl Inspection {
         }
         if self.files.len() > 1 {
             let (c, d, k) = self.sweep_counts();
-            let _ = writeln!(s, "\n{} files: {c} cornering, {d} drive/brake, {k} combined sweeps", self.files.len());
+            let _ = writeln!(
+                s,
+                "\n{} files: {c} cornering, {d} drive/brake, {k} combined, {} camber sweeps",
+                self.files.len(),
+                self.camber_sweeps()
+            );
         }
         s
     }
@@ -203,18 +220,44 @@ impl FileReport {
         if verbose && !self.sweeps.is_empty() {
             let _ = writeln!(s, "\nsweeps");
             for w in &self.sweeps {
-                let _ = writeln!(s, "  {:<48} rows {:>6}–{:<6} reach {:.3}", w.name, w.first_row, w.last_row, w.reach);
+                let why = w.conditioning_reason.as_ref().map(|r| format!("  ({r})")).unwrap_or_default();
+                let _ =
+                    writeln!(s, "  {:<48} rows {:>6}–{:<6} reach {:.3}{why}", w.name, w.first_row, w.last_row, w.reach);
             }
         }
+        let leading = self
+            .sweeps
+            .iter()
+            .filter(|w| w.conditioning_reason.as_deref().is_some_and(|r| r.starts_with("leading")))
+            .count();
+        if leading > 0 {
+            let _ = writeln!(
+                s,
+                "\nconditioning {leading} sweeps open the run at a cell swept again later: warm-up, not fitted"
+            );
+        }
+        let excluded: usize = self.excluded.iter().map(|e| e.1).sum();
         let _ = writeln!(
             s,
-            "\nrows        {} in sweeps, {} in conditioning sweeps, {} excluded",
+            "\nrows        {} = {} in sweeps + {} in conditioning sweeps + {} excluded{}",
+            self.rows,
             self.rows_in_sweeps,
             self.rows_in_conditioning,
-            self.excluded.iter().map(|e| e.1).sum::<usize>()
+            excluded,
+            if self.rows_in_sweeps + self.rows_in_conditioning + excluded == self.rows {
+                String::new()
+            } else {
+                "  (DO NOT ADD UP: a reader fault, please report)".to_owned()
+            }
         );
         for (why, n) in &self.excluded {
             let _ = writeln!(s, "  {n:>8}  {why}");
+        }
+        if !self.lines_not_read.is_empty() {
+            let _ = writeln!(s, "lines not read as rows (see the warnings for where)");
+            for (why, n) in &self.lines_not_read {
+                let _ = writeln!(s, "  {n:>8}  {why}");
+            }
         }
         if !self.warnings.is_empty() {
             let _ = writeln!(s, "\nwarnings");

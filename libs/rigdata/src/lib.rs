@@ -26,7 +26,9 @@
 //!
 //! Pure library: no DDS, no clock.
 
+pub mod camber;
 pub mod channels;
+pub mod conditioning;
 pub mod dat;
 pub mod error;
 pub mod fixture;

@@ -53,6 +53,14 @@ pub struct SweepOptions {
     /// A sweep reaching less than this fraction of its kind's typical reach is a conditioning
     /// (warm-up) sweep.
     pub conditioning_fraction: f64,
+    /// `SR` (no `SL` in the file) moving is a slip-ratio sweep only where the wheel is driven or
+    /// braked: |FX| above this fraction of FZ in at least a tenth of the rows.
+    pub sr_driven_fx_fraction: f64,
+    /// A camber sweep spans at least this much camber, deg.
+    pub camber_sweep_min_deg: f64,
+    /// Load wandering around its setpoint while the slip angle sweeps stays one cell when it
+    /// comes back to the level it left and strays at most this fraction of it.
+    pub fz_wander_fraction: f64,
 }
 
 impl Default for SweepOptions {
@@ -76,6 +84,9 @@ impl Default for SweepOptions {
             idle_split_s: 2.0,
             min_sweep_s: 1.0,
             conditioning_fraction: 0.5,
+            sr_driven_fx_fraction: 0.15,
+            camber_sweep_min_deg: 1.5,
+            fz_wander_fraction: 0.3,
         }
     }
 }
@@ -105,6 +116,8 @@ pub enum Exclusion {
     IncompleteSweep,
     /// A sweep shorter than the shortest kept.
     ShortSweep,
+    /// `SR` moving while the wheel rolls free (FX small): not a slip ratio.
+    SrFreeRolling,
 }
 
 impl Exclusion {
@@ -122,6 +135,51 @@ impl Exclusion {
             Exclusion::Idle => "rolling between sweeps",
             Exclusion::IncompleteSweep => "incomplete sweep",
             Exclusion::ShortSweep => "sweep too short",
+            Exclusion::SrFreeRolling => "SR moving while the wheel rolls free (not a slip ratio)",
+        }
+    }
+}
+
+/// What a sweep moves.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
+pub enum Swept {
+    /// The slip angle (a cornering sweep).
+    SlipAngle,
+    /// The slip ratio (drive/brake or combined).
+    SlipRatio,
+    /// The camber, stepped at a held slip angle: free-rolling data at several cambers, which
+    /// the fitter takes as cornering data (its camber terms); its cell's `alpha_rad` is the
+    /// held slip angle and its `gamma_rad` the median camber.
+    Camber,
+}
+
+impl Swept {
+    /// Name in reports.
+    pub fn name(self) -> &'static str {
+        match self {
+            Swept::SlipAngle => "slip angle",
+            Swept::SlipRatio => "slip ratio",
+            Swept::Camber => "camber",
+        }
+    }
+}
+
+/// Why a sweep is a conditioning (warm-up) sweep, left out of the fit.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
+pub enum Conditioning {
+    /// It reaches less than [`SweepOptions::conditioning_fraction`] of its kind's typical reach.
+    ShortReach,
+    /// One of several sweeps opening a run (or a pressure) at one cell that is swept again
+    /// later: the tyre being brought to temperature.
+    LeadingRepeat,
+}
+
+impl Conditioning {
+    /// Reason in reports.
+    pub fn name(self) -> &'static str {
+        match self {
+            Conditioning::ShortReach => "short reach",
+            Conditioning::LeadingRepeat => "leading sweeps at a cell swept again later",
         }
     }
 }
@@ -131,8 +189,12 @@ impl Exclusion {
 pub struct FoundSweep {
     /// Its cell and kind.
     pub cell: Cell,
-    /// A conditioning (warm-up) sweep.
-    pub conditioning: bool,
+    /// What it sweeps.
+    pub swept: Swept,
+    /// Why it is a conditioning (warm-up) sweep, if it is one.
+    pub conditioning: Option<Conditioning>,
+    /// Largest |camber| change from the sweep's lowest camber (camber sweeps), deg.
+    pub camber_span_deg: f64,
     /// First row (0-based index into the table).
     pub first: usize,
     /// Last row, inclusive.
@@ -167,7 +229,8 @@ impl TestKind {
         let l = id.to_ascii_lowercase();
         if l.contains("drive") || l.contains("brake") || l.contains("combined") || l.contains("longitudinal") {
             Some(TestKind::DriveBrake)
-        } else if l.contains("cornering") || l.contains("lateral") || l.contains("free rolling") {
+        } else if l.contains("cornering") || l.contains("lateral") || l.contains("free rolling") || l.contains("camber")
+        {
             Some(TestKind::Cornering)
         } else {
             None
@@ -183,7 +246,7 @@ impl TestKind {
     }
 }
 
-fn median_of(it: impl Iterator<Item = f64>) -> f64 {
+pub(crate) fn median_of(it: impl Iterator<Item = f64>) -> f64 {
     let mut v: Vec<f64> = it.filter(|x| x.is_finite()).collect();
     if v.is_empty() {
         return f64::NAN;
@@ -423,6 +486,75 @@ fn join_halves(x: &[f64], pieces: Vec<(usize, usize)>, on: f64) -> Vec<(usize, u
 /// A held quantity, the reason its rows are excluded when it moves, and its tolerance.
 type HeldCheck<'a> = (&'a [f64], Exclusion, Box<dyn Fn(f64) -> f64 + 'a>);
 
+/// `flag` with gaps shorter than `fill` rows between flagged rows filled in: a sweep's
+/// turn-arounds, where the slip angle pauses, belong to the sweep.
+fn fill_short_gaps(flag: &[bool], fill: usize) -> Vec<bool> {
+    let mut out = flag.to_vec();
+    let mut k = 0;
+    while k < out.len() {
+        if out[k] {
+            k += 1;
+            continue;
+        }
+        let s = k;
+        while k < out.len() && !out[k] {
+            k += 1;
+        }
+        if s > 0 && k < out.len() && k - s < fill {
+            out[s..k].iter_mut().for_each(|m| *m = true);
+        }
+    }
+    out
+}
+
+/// Load flagged as moving while the slip angle sweeps is the rig's load control wandering, not a
+/// change of cell, when the load after the sweep is back at the level before it and never strays
+/// more than `max_fraction` of it: those rows are given back (the sweep stays one sweep, each
+/// point with its measured load). Real rigs of some rounds swing ±10–20 % at the sweep's ends.
+fn forgive_wander(
+    fz: &[f64],
+    bad: &mut [bool],
+    sweeping: &[bool],
+    w: usize,
+    max_fraction: f64,
+    tol: &dyn Fn(f64) -> f64,
+) {
+    let n = fz.len();
+    let level = |rows: std::ops::Range<usize>, bad: &[bool]| median_of(rows.filter(|&i| !bad[i]).map(|i| fz[i]));
+    let mut i = 0;
+    while i < n {
+        if !sweeping[i] {
+            i += 1;
+            continue;
+        }
+        let s = i;
+        while i < n && sweeping[i] {
+            i += 1;
+        }
+        let e = i;
+        if !bad[s..e].iter().any(|b| *b) {
+            continue;
+        }
+        let before = level(s.saturating_sub(2 * w)..s, bad);
+        let after = level(e..(e + 2 * w).min(n), bad);
+        if !(before.is_finite() && after.is_finite()) || (before - after).abs() > tol(before.abs()) {
+            continue;
+        }
+        let stray = fz[s..e].iter().filter(|x| x.is_finite()).fold(0.0_f64, |m, x| m.max((x - before).abs()));
+        if stray <= max_fraction * before.abs() {
+            bad[s..e].iter_mut().for_each(|b| *b = false);
+        }
+    }
+}
+
+/// Where `SR` is the only slip ratio, a slip-ratio excursion is a sweep only if the wheel is
+/// driven or braked over it: `SR` also moves with slip angle and load while the wheel rolls free.
+fn driven(sig: &Signals, (f, l): (usize, usize), fx_fraction: f64) -> bool {
+    let rows = l + 1 - f;
+    let hard = (f..=l).filter(|&r| sig.fx_n[r].abs() > fx_fraction * sig.fz_n[r].abs()).count();
+    hard * 10 >= rows
+}
+
 /// Finds the sweeps of a run. `test` is what the file says its test is, if it says.
 pub fn find_sweeps(
     sig: &Signals,
@@ -464,25 +596,45 @@ pub fn find_sweeps(
             None
         };
     }
-    let held: [HeldCheck; 4] = [
-        (&sig.fz_n, Exclusion::LoadRamp, Box::new(|l| (opt.fz_tol_fraction * l).max(opt.fz_tol_n))),
+    let sa_deg: Vec<f64> = sig.alpha_rad.iter().map(|a| a.to_degrees()).collect();
+    let sa_moving = unsteady(&sa_deg, w, |_| opt.sa_moving_deg);
+    let fill = rows_of(1.0);
+    let sa_sweeping = fill_short_gaps(&sa_moving, fill);
+    let fz_tol = |l: f64| (opt.fz_tol_fraction * l).max(opt.fz_tol_n);
+    let held: [HeldCheck; 3] = [
+        (&sig.fz_n, Exclusion::LoadRamp, Box::new(fz_tol)),
         (&sig.p_pa, Exclusion::PressureRamp, Box::new(|l| (0.03 * l).max(opt.p_tol_pa))),
-        (&sig.gamma_rad, Exclusion::CamberChange, Box::new(|_| opt.gamma_tol_rad)),
         (sig.v_mps.as_deref().unwrap_or(&[]), Exclusion::SpeedChange, Box::new(|l| (0.05 * l).max(opt.v_tol_mps))),
     ];
     for (x, reason, tol) in held.iter() {
         if x.len() != n {
             continue;
         }
-        let bad = unsteady(x, w, tol);
+        let mut bad = unsteady(x, w, tol);
+        if *reason == Exclusion::LoadRamp {
+            forgive_wander(x, &mut bad, &sa_sweeping, w, opt.fz_wander_fraction, tol);
+        }
         for i in 0..n {
             if why[i].is_none() && bad[i] {
                 why[i] = Some(*reason);
             }
         }
     }
-    let sa_deg: Vec<f64> = sig.alpha_rad.iter().map(|a| a.to_degrees()).collect();
-    let sa_moving = unsteady(&sa_deg, w, |_| opt.sa_moving_deg);
+    // Camber stepped at a held slip angle is a sweep of its own; elsewhere a camber change is a
+    // change of cell.
+    let gamma_deg: Vec<f64> = sig.gamma_rad.iter().map(|g| g.to_degrees()).collect();
+    let camber_moving = unsteady(&gamma_deg, w, |_| opt.gamma_tol_rad.to_degrees());
+    let camber_sweeps =
+        crate::camber::find_camber_sweeps(sig, &why, &sa_sweeping, &camber_moving, kappa_source, w, opt);
+    let mut taken = vec![false; n];
+    for &(f, l) in &camber_sweeps {
+        taken[f..=l].iter_mut().for_each(|t| *t = true);
+    }
+    for i in 0..n {
+        if why[i].is_none() && camber_moving[i] && !taken[i] {
+            why[i] = Some(Exclusion::CamberChange);
+        }
+    }
     let (kz, kon) = match kappa_source {
         KappaSource::EffectiveRadius => (opt.sr_zero, opt.sr_on),
         _ => (opt.kappa_zero, opt.kappa_on),
@@ -491,36 +643,22 @@ pub fn find_sweeps(
     let kappa_ignored = kappa_source == KappaSource::EffectiveRadius && test == Some(TestKind::Cornering);
     let look_for_kappa = uses_kappa && !kappa_ignored;
     let idle = rows_of(opt.idle_split_s);
-    let fill = rows_of(1.0);
-    let mut raw: Vec<(bool, usize, usize)> = Vec::new(); // (slip angle?, first, last)
+    let mut raw: Vec<(Swept, usize, usize)> = Vec::new();
+    let mut sr_free = Vec::new();
     let mut i = 0;
     while i < n {
-        if why[i].is_some() {
+        if why[i].is_some() || taken[i] {
             i += 1;
             continue;
         }
         let a = i;
-        while i < n && why[i].is_none() {
+        while i < n && why[i].is_none() && !taken[i] {
             i += 1;
         }
         let b = i;
         // Moving and held pieces of the slip angle; held gaps shorter than 1 s between moving
         // rows (turn-arounds) belong to the sweep.
-        let mut moving: Vec<bool> = sa_moving[a..b].to_vec();
-        let mut k = 0;
-        while k < moving.len() {
-            if !moving[k] {
-                let s = k;
-                while k < moving.len() && !moving[k] {
-                    k += 1;
-                }
-                if s > 0 && k < moving.len() && k - s < fill {
-                    moving[s..k].iter_mut().for_each(|m| *m = true);
-                }
-            } else {
-                k += 1;
-            }
-        }
+        let moving = fill_short_gaps(&sa_moving[a..b], fill);
         let mut k = 0;
         while k < moving.len() {
             let s = k;
@@ -535,28 +673,35 @@ pub fn find_sweeps(
                     .flat_map(|ex| split_at_reach_changes(&sa_deg, ex, opt.sa_on_deg))
                     .collect();
                 for (f, l) in join_halves(&sa_deg, pieces, opt.sa_on_deg) {
-                    raw.push((true, f, l));
+                    raw.push((Swept::SlipAngle, f, l));
                 }
                 why[pa..pb].iter_mut().for_each(|w| *w = Some(Exclusion::SlipAngleChange));
             } else {
+                why[pa..pb].iter_mut().for_each(|w| *w = Some(Exclusion::Idle));
                 if look_for_kappa {
                     let pieces: Vec<(usize, usize)> = excursions(&sig.kappa, pa, pb, kz, kon, idle)
                         .into_iter()
                         .flat_map(|ex| split_at_reach_changes(&sig.kappa, ex, kon))
                         .collect();
-                    for (f, l) in join_halves(&sig.kappa, pieces, kon) {
-                        raw.push((false, f, l));
+                    for p in join_halves(&sig.kappa, pieces, kon) {
+                        if kappa_source == KappaSource::EffectiveRadius && !driven(sig, p, opt.sr_driven_fx_fraction) {
+                            sr_free.push(p);
+                        } else {
+                            raw.push((Swept::SlipRatio, p.0, p.1));
+                        }
                     }
                 }
-                why[pa..pb].iter_mut().for_each(|w| *w = Some(Exclusion::Idle));
             }
         }
     }
-    // Which rows a sweep with no return to zero at its end left behind is told apart below.
+    for (f, l) in sr_free {
+        why[f..=l].iter_mut().for_each(|w| *w = Some(Exclusion::SrFreeRolling));
+    }
+    raw.extend(camber_sweeps.iter().map(|&(f, l)| (Swept::Camber, f, l)));
     let min_rows = rows_of(opt.min_sweep_s).max(10);
     let mut sweeps = Vec::new();
     let mut sr_zeroed = 0;
-    for (is_sa, f, l) in raw {
+    for (swept, f, l) in raw {
         if l + 1 - f < min_rows {
             why[f..=l].iter_mut().for_each(|w| *w = Some(Exclusion::ShortSweep));
             continue;
@@ -564,17 +709,30 @@ pub fn find_sweeps(
         let rows = f..=l;
         let med = |x: &[f64]| median_of(x[rows.clone()].iter().copied());
         let alpha = med(&sig.alpha_rad);
-        let (kind, reach) = if is_sa {
-            (SweepKind::Cornering, sig.alpha_rad[rows.clone()].iter().fold(0.0_f64, |m, a| m.max(a.abs())))
-        } else {
-            let k = if alpha.abs() < 1.0_f64.to_radians() { SweepKind::DriveBrake } else { SweepKind::Combined };
-            (k, sig.kappa[rows.clone()].iter().fold(0.0_f64, |m, a| m.max(a.abs())))
+        let max_abs = |x: &[f64]| x[rows.clone()].iter().fold(0.0_f64, |m, a| m.max(a.abs()));
+        let (kind, reach) = match swept {
+            Swept::SlipAngle => (SweepKind::Cornering, max_abs(&sig.alpha_rad)),
+            // A camber sweep's slip is its held slip angle.
+            Swept::Camber => (SweepKind::Cornering, alpha.abs()),
+            Swept::SlipRatio => {
+                let k = if alpha.abs() < 1.0_f64.to_radians() { SweepKind::DriveBrake } else { SweepKind::Combined };
+                (k, max_abs(&sig.kappa))
+            }
         };
-        let kappa = if is_sa && kappa_source == KappaSource::EffectiveRadius {
+        let free = swept != Swept::SlipRatio;
+        let kappa = if free && kappa_source == KappaSource::EffectiveRadius {
             sr_zeroed += l + 1 - f;
             0.0
-        } else if is_sa {
+        } else if free {
             med(&sig.kappa)
+        } else {
+            0.0
+        };
+        let camber_span_deg = if swept == Swept::Camber {
+            let (lo, hi) = sig.gamma_rad[rows.clone()]
+                .iter()
+                .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), g| (lo.min(*g), hi.max(*g)));
+            (hi - lo).to_degrees()
         } else {
             0.0
         };
@@ -583,20 +741,21 @@ pub fn find_sweeps(
             fz_n: med(&sig.fz_n),
             p_pa: med(&sig.p_pa),
             gamma_rad: med(&sig.gamma_rad),
-            alpha_rad: if is_sa { 0.0 } else { alpha },
+            alpha_rad: if swept == Swept::SlipAngle { 0.0 } else { alpha },
             kappa,
             // 0 when the file has no speed channel (a JSON-safe "unknown").
             vx_mps: sig.v_mps.as_ref().map(|v| med(v)).filter(|v| v.is_finite()).unwrap_or(0.0),
             slip_reach: reach,
         };
         why[f..=l].iter_mut().for_each(|w| *w = None);
-        sweeps.push(FoundSweep { cell, conditioning: false, first: f, last: l });
+        sweeps.push(FoundSweep { cell, swept, conditioning: None, camber_span_deg, first: f, last: l });
     }
     // Rows of moving pieces outside any sweep: a sweep cut off, or a slip angle being set.
     mark_incomplete(&mut why, &sa_deg, opt.sa_zero_deg);
     sweeps.sort_by_key(|s| s.first);
-    mark_conditioning(&mut sweeps, opt.conditioning_fraction);
-    let mut sweeps = merge_conditioning(sweeps, &why);
+    crate::conditioning::mark_short_reach(&mut sweeps, opt.conditioning_fraction);
+    let mut sweeps = crate::conditioning::merge_conditioning(sweeps, &why);
+    crate::conditioning::mark_leading_repeats(&mut sweeps);
     // Back-to-back sweeps share their boundary row: give it to the first.
     for k in 1..sweeps.len() {
         let prev_last = sweeps[k - 1].last;
@@ -646,49 +805,6 @@ fn mark_incomplete(why: &mut [Option<Exclusion>], sa_deg: &[f64], zero: f64) {
         };
         why[s..i].iter_mut().for_each(|w| *w = Some(reason));
     }
-}
-
-/// Sweeps reaching less than `fraction` of their family's typical reach (the 75th percentile
-/// of the slip-angle sweeps, or of the slip-ratio sweeps) are conditioning sweeps.
-fn mark_conditioning(sweeps: &mut [FoundSweep], fraction: f64) {
-    for sa in [true, false] {
-        let fam = |s: &FoundSweep| (s.cell.kind == SweepKind::Cornering) == sa;
-        let mut reach: Vec<f64> = sweeps.iter().filter(|s| fam(s)).map(|s| s.cell.slip_reach).collect();
-        if reach.len() < 2 {
-            continue;
-        }
-        reach.sort_by(f64::total_cmp);
-        let typical = reach[(reach.len() - 1) * 3 / 4];
-        for s in sweeps.iter_mut().filter(|s| fam(s)) {
-            s.conditioning = s.cell.slip_reach < fraction * typical;
-        }
-    }
-}
-
-/// Conditioning sweeps that follow each other at one cell, with only rolling (or the slip angle
-/// settling) between them, are
-/// one warm-up.
-fn merge_conditioning(sweeps: Vec<FoundSweep>, why: &[Option<Exclusion>]) -> Vec<FoundSweep> {
-    let mut out: Vec<FoundSweep> = Vec::with_capacity(sweeps.len());
-    for s in sweeps {
-        if let Some(p) = out.last_mut()
-            && p.conditioning
-            && s.conditioning
-            && p.cell.kind == s.cell.kind
-            && (p.cell.fz_n - s.cell.fz_n).abs() <= (0.05 * p.cell.fz_n.abs()).max(50.0)
-            && (p.cell.p_pa - s.cell.p_pa).abs() <= 5_000.0
-            && (p.cell.gamma_rad - s.cell.gamma_rad).abs() <= 0.5_f64.to_radians()
-            && why.get(p.last + 1..s.first).is_some_and(|gap| {
-                gap.iter().all(|w| matches!(w, None | Some(Exclusion::Idle | Exclusion::SlipAngleChange)))
-            })
-        {
-            p.last = s.last;
-            p.cell.slip_reach = p.cell.slip_reach.max(s.cell.slip_reach);
-            continue;
-        }
-        out.push(s);
-    }
-    out
 }
 
 #[cfg(test)]

@@ -125,7 +125,8 @@ pub fn parse(text: &str) -> Option<Unit> {
         "knm" | "kn-m" | "kn*m" | "kn.m" => (Moment, 1e3, 0.0),
         "lbf-ft" | "lb-ft" | "ft-lbf" | "ft-lb" | "lbfft" | "ftlb" | "lbf*ft" | "ft*lbf" => (Moment, LBF_N * FT_M, 0.0),
         "lbf-in" | "lb-in" | "in-lbf" | "in-lb" | "lbf*in" | "in*lbf" => (Moment, LBF_N * IN_M, 0.0),
-        "none" | "-" | "1" | "ratio" | "nd" | "n/a" => (Ratio, 1.0, 0.0),
+        // `SAE` is how some TTC rounds label SL: the SAE slip-ratio definition, a plain ratio.
+        "none" | "-" | "1" | "ratio" | "nd" | "n/a" | "sae" => (Ratio, 1.0, 0.0),
         "%" | "percent" => (Ratio, 0.01, 0.0),
         "degc" | "c" | "celsius" | "degcelsius" => (Temperature, 1.0, 0.0),
         "degf" | "f" | "fahrenheit" => (Temperature, 5.0 / 9.0, -32.0 * 5.0 / 9.0),
@@ -164,6 +165,14 @@ mod tests {
         assert!(close(conv("°C", 40.0), 40.0));
         assert_eq!(parse("none").unwrap().quantity, Quantity::Ratio);
         assert_eq!(parse("-").unwrap().quantity, Quantity::Ratio);
+        // Spellings of other test rounds.
+        assert_eq!(parse("SAE").unwrap(), parse("none").unwrap());
+        assert_eq!(parse("sec").unwrap(), parse("s").unwrap());
+        assert_eq!(parse("Nm").unwrap(), parse("N-m").unwrap());
+        assert_eq!(parse("deg C").unwrap(), parse("degC").unwrap());
+        assert!(close(conv("deg F", 86.0), 30.0));
+        assert!(close(conv("mph", 25.0), 11.176));
+        assert!(close(conv("in", 10.0), 0.254));
         assert!(parse("furlongs").is_none());
         let u = parse("bar").unwrap();
         assert!(close(u.from_target(u.to_target(1.3)), 1.3));
