@@ -241,6 +241,9 @@ pub struct ChannelProblem<'a> {
     pub threads: usize,
     /// Physical margins added as penalty residuals (see [`crate::physics`]), if any.
     pub penalty: Option<Penalty<'a>>,
+    /// A weight per point (residual × weight), when points of different sets share one fit
+    /// (a joint fit of two stages' data, each in % of its own peak); `None`: all 1.
+    weights: Option<&'a [f64]>,
     /// Number of penalty residuals (fixed for a grid).
     penalty_count: usize,
     /// `points`' inputs as the batch kernel takes them.
@@ -315,6 +318,7 @@ impl<'a> ChannelProblem<'a> {
             differences: Differences::Central,
             threads,
             penalty: None,
+            weights: None,
             penalty_count: 0,
             columns: InputColumns::of(points),
             last: std::sync::Mutex::new(None),
@@ -327,6 +331,13 @@ impl<'a> ChannelProblem<'a> {
         crate::physics::shortfalls(self.base, penalty.set, penalty.grid, &mut v);
         self.penalty_count = v.len();
         self.penalty = Some(penalty);
+        self
+    }
+
+    /// Weights the residuals point by point (`weights` as long as the points; a slice of
+    /// another length is ignored).
+    pub fn with_weights(mut self, weights: &'a [f64]) -> Self {
+        self.weights = (weights.len() == self.points.len()).then_some(weights);
         self
     }
 
@@ -354,10 +365,15 @@ impl<'a> ChannelProblem<'a> {
     /// Residuals of points `range` into `out` (as long as the range).
     fn residuals_into(&self, t: &TyreParams, range: Range<usize>, scratch: &mut BatchScratch, out: &mut [f64]) {
         let pts = &self.points[range.clone()];
-        self.channel.eval_batch(t, &self.columns.batch(range), scratch, out);
+        self.channel.eval_batch(t, &self.columns.batch(range.clone()), scratch, out);
         let inv = 1.0 / self.scale;
         for (o, pt) in out.iter_mut().zip(pts) {
             *o = (*o - pt.measured) * inv;
+        }
+        if let Some(w) = self.weights.and_then(|w| w.get(range)) {
+            for (o, w) in out.iter_mut().zip(w) {
+                *o *= w;
+            }
         }
     }
 

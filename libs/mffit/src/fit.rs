@@ -72,6 +72,23 @@ pub fn fit_step_with(
     settings: &StepSettings,
     penalty: Option<Penalty<'_>>,
 ) -> Result<StepOutcome, FitError> {
+    fit_step_weighted(stage, params, keys, points, None, channel, scale, settings, penalty)
+}
+
+/// [`fit_step_with`] with a weight per point (`weights[i]` multiplies point i's residual): for
+/// a fit over two stages' points, each set in units of its own peak.
+#[allow(clippy::too_many_arguments)] // fit_step_with's arguments plus the weights
+pub fn fit_step_weighted(
+    stage: &str,
+    params: &mut TyreParams,
+    keys: &[&'static str],
+    points: &[Point],
+    weights: Option<&[f64]>,
+    channel: Channel,
+    scale: f64,
+    settings: &StepSettings,
+    penalty: Option<Penalty<'_>>,
+) -> Result<StepOutcome, FitError> {
     if points.len() <= keys.len() {
         return Err(FitError::NotEnoughData { stage: stage.to_owned(), points: points.len(), needed: keys.len() + 1 });
     }
@@ -85,6 +102,9 @@ pub fn fit_step_with(
     problem.differences = settings.differences;
     if let Some(pen) = penalty {
         problem = problem.with_penalty(pen);
+    }
+    if let Some(w) = weights {
+        problem = problem.with_weights(w);
     }
     let mut options = Options::default()
         .max_iterations(settings.max_iterations)

@@ -29,6 +29,7 @@ mod fy_combined;
 mod fy_pure;
 mod mx;
 mod mz_combined;
+mod mz_joint;
 mod mz_pure;
 pub mod nominal;
 mod radius;
@@ -235,8 +236,9 @@ type Reusable = (StageReport, u64, Vec<(String, f64)>, u64);
 /// Stages that fit one model channel on the points they select and nothing else (the radius
 /// stage fits Re on other points too, the relaxation stage Cx): for them, unchanged points and
 /// unchanged model values there mean an unchanged problem.
-const ONE_CHANNEL_STAGES: [&str; 7] =
-    ["fy_pure", "mz_pure", "fx_pure", "fx_combined", "fy_combined", "mz_combined", "mx"];
+/// Not `mz_combined`: it may refine `mz_pure`'s trail keys ([`mz_joint`]), and restoring its
+/// old values after a refitted `mz_pure` would undo that stage.
+const ONE_CHANNEL_STAGES: [&str; 6] = ["fy_pure", "mz_pure", "fx_pure", "fx_combined", "fy_combined", "mx"];
 
 /// A fingerprint of `channel`'s model values at `points` (bit for bit): a stage whose points
 /// and model values are unchanged after an upstream stage was refitted depends on nothing that
@@ -648,6 +650,7 @@ pub fn fit(data: &Dataset, opts: &FitOptions) -> Result<FitResult, FitError> {
         rep.wall_s = t.elapsed().as_secs_f64();
         stages.push(rep);
     }
+    note_refined_later(&mut stages, &params);
     let mut my = StageReport::new("my", "MY");
     my.skipped = Some(
         "rolling resistance moment is not measurable on this rig class (thesis §5): QSY* keep the template's generic values"
@@ -692,6 +695,25 @@ pub fn fit(data: &Dataset, opts: &FitOptions) -> Result<FitResult, FitError> {
         validation: Vec::new(),
         resampled: ctx.resampled.clone(),
     })
+}
+
+/// A coefficient a later stage refitted (`mz_combined` refines `mz_pure`'s trail keys) is one
+/// value in the `.tir`: the earlier stage's report says so, with the value written.
+fn note_refined_later(stages: &mut [StageReport], params: &TyreParams) {
+    for i in 0..stages.len() {
+        let (head, tail) = stages.split_at_mut(i + 1);
+        let rep = &mut head[i];
+        let mut later: Vec<String> = Vec::new();
+        for e in &rep.estimates {
+            if let Some(by) = tail.iter().find(|t| t.keys.iter().any(|k| *k == e.key)) {
+                let now = params.get(&e.key).unwrap_or(f64::NAN);
+                later.push(format!("{} {:.6} → {now:.6} ({})", e.key, e.value, by.stage));
+            }
+        }
+        if !later.is_empty() {
+            rep.notes.push(format!("refined by a later stage (the .tir holds the later value): {}", later.join(", ")));
+        }
+    }
 }
 
 /// Writes the tested range into the `.tir` limits (the model is valid where it was tested).

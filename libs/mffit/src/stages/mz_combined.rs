@@ -1,6 +1,7 @@
 //! Stage 6, `mz_combined`: the s-arm of the combined aligning moment (SSZ1–4): Fx times a lever
-//! that depends on Fy and camber. Coupled-drive MZ is noisy (thesis: ~22 % on a 385 N·m signal),
-//! so only the arm is fitted; a fit that makes MZ non-finite or worse is not kept.
+//! that depends on Fy and camber; a fit that makes MZ non-finite or worse is not kept. Then the
+//! trail and residual torque under combined slip are refined with `mz_pure`'s points
+//! ([`crate::stages::mz_joint`]), kept only when the pure fit stays where it was.
 
 use mftyre::TyreParams;
 
@@ -91,9 +92,14 @@ impl Stage for MzCombined {
             rep.rmse = at_zero;
             rep.notes.push("the fitted s-arm did not improve MZ: kept at zero".into());
         }
-        rep.notes.push(
-            "coupled-drive MZ is noisy (thesis: ~22 % on a 385 N·m signal); only the s-arm is fitted here".into(),
-        );
-        finish(ctx, params, &start, rep, Channel::Mz, data, margins)
+        rep.notes
+            .push("coupled-drive MZ is noisy (thesis: ~22 % on a 385 N·m signal); the s-arm is fitted first".into());
+        finish(ctx, params, &start, rep, Channel::Mz, data, margins)?;
+        // With cornering data, the trail and residual torque the combined sweeps show are
+        // refined together with mz_pure's points (without, they were fitted above).
+        if pure.is_empty() {
+            crate::stages::mz_joint::refine(ctx, params, rep, data)?;
+        }
+        Ok(())
     }
 }
