@@ -26,6 +26,8 @@ pub struct PlannedSweep {
     pub ia_deg: f64,
     /// Held slip angle (ISO-W), deg.
     pub sa_deg: f64,
+    /// A camber sweep (camber stepped at the held slip angle `sa_deg`; `ia_deg` its median).
+    pub camber_sweep: bool,
 }
 
 /// A synthetic run and its sweeps.
@@ -59,6 +61,44 @@ pub struct FixtureSpec {
     pub with_sl: bool,
     /// Noise seed.
     pub seed: u64,
+    /// How the units line is spelled (and the values scaled).
+    pub units: UnitStyle,
+    /// An older round's file: a title with no tyre name, no `testid`, no `NFX`.
+    pub older_round: bool,
+    /// The load wanders while the slip angle sweeps, by up to this fraction of its setpoint
+    /// (−0.65× at one end of the sweep, +1× at the other, as some rounds' load control does).
+    pub fz_wander: f64,
+    /// A camber sweep at the end of each pressure: camber stepped through these levels at the
+    /// held slip angle (`sa_deg`, ISO-W), first load.
+    pub camber_sweep: Option<CamberSweep>,
+    /// Full-reach warm-up sweeps opening a drive/brake run at the last load (a cell the run
+    /// sweeps again later) instead of the short conditioning sweeps; 0 for none.
+    pub warmup_sweeps: usize,
+    /// Slip-ratio reach of the drive/brake sweeps (0.2 in TTC runs, 0.65 in pure longitudinal
+    /// runs of some rounds).
+    pub kappa_reach: f64,
+}
+
+/// A camber sweep: camber stepped at a held slip angle.
+#[derive(Debug, Clone, PartialEq)]
+pub struct CamberSweep {
+    /// Held slip angle (ISO-W), deg.
+    pub sa_deg: f64,
+    /// Camber levels in order, deg.
+    pub cambers_deg: Vec<f64>,
+}
+
+/// Units lines of different test rounds.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum UnitStyle {
+    /// `s kph rpm deg cm kPa N N-m none degC`.
+    #[default]
+    Ttc,
+    /// A later round's spellings: `sec`, `Nm`, `deg C`, `deg F` (AMBTMP, then honestly °F), `SAE`
+    /// for SL.
+    LaterRound,
+    /// US units where the file says so: mph, in, psi, lbf, degF.
+    Imperial,
 }
 
 impl FixtureSpec {
@@ -74,6 +114,12 @@ impl FixtureSpec {
             sweep_s: 12.0,
             with_sl: true,
             seed: 1,
+            units: UnitStyle::Ttc,
+            older_round: false,
+            fz_wander: 0.0,
+            camber_sweep: None,
+            warmup_sweeps: 0,
+            kappa_reach: 0.2,
         }
     }
 
@@ -90,6 +136,12 @@ impl FixtureSpec {
             sweep_s: 5.0,
             with_sl: true,
             seed: 2,
+            units: UnitStyle::Ttc,
+            older_round: false,
+            fz_wander: 0.0,
+            camber_sweep: None,
+            warmup_sweeps: 0,
+            kappa_reach: 0.2,
         }
     }
 }
@@ -122,6 +174,8 @@ struct State {
 }
 
 struct Builder {
+    /// Load wander over a slip-angle sweep (fraction of the setpoint).
+    wander: f64,
     dt: f64,
     t: f64,
     s: State,
@@ -175,6 +229,7 @@ impl Builder {
             let mut s = base;
             if on_sa {
                 s.sa_deg = amp * x;
+                s.fz_n = base.fz_n * (1.0 + self.wander * x * x * if x > 0.0 { 1.0 } else { -0.65 });
             } else {
                 s.sl = amp * x;
             }
@@ -189,6 +244,7 @@ impl Builder {
 /// Makes a synthetic run.
 pub fn ttc_run(spec: &FixtureSpec) -> FixtureRun {
     let mut b = Builder {
+        wander: spec.fz_wander,
         dt: 1.0 / spec.rate_hz,
         t: -1.0 / spec.rate_hz,
         s: State { v_kph: 0.0, fz_n: 0.0, p_kpa: spec.pressures_kpa[0], ia_deg: 0.0, sa_deg: 0.0, sl: 0.0 },
@@ -220,6 +276,7 @@ pub fn ttc_run(spec: &FixtureSpec) -> FixtureRun {
             p_kpa: to.p_kpa,
             ia_deg: to.ia_deg,
             sa_deg: -to.sa_deg,
+            camber_sweep: false,
         });
     };
     for &p in &spec.pressures_kpa {
@@ -229,11 +286,19 @@ pub fn ttc_run(spec: &FixtureSpec) -> FixtureRun {
         b.hold(1.0);
         let first = State { fz_n: spec.loads_n[0], ia_deg: spec.cambers_deg[0], sa_deg: 0.0, ..b.s };
         let cond_amp = if spec.cornering { 3.0 } else { 0.04 };
-        // The conditioning sweeps: two short ones back to back.
-        plan(&mut b, &mut sweeps, first, true, cond_amp);
-        b.sweep(spec.sweep_s * 0.5, cond_amp, spec.cornering);
-        b.hold(1.0);
-        let amp = if spec.cornering { 12.0 } else { 0.2 };
+        let amp = if spec.cornering { 12.0 } else { spec.kappa_reach };
+        if spec.warmup_sweeps > 0 {
+            // Warm-up: full sweeps at the last load, a cell swept again below.
+            let warm = State { fz_n: spec.loads_n[spec.loads_n.len() - 1], ..first };
+            for _ in 0..spec.warmup_sweeps {
+                plan(&mut b, &mut sweeps, warm, true, amp);
+            }
+        } else {
+            // The conditioning sweeps: two short ones back to back.
+            plan(&mut b, &mut sweeps, first, true, cond_amp);
+            b.sweep(spec.sweep_s * 0.5, cond_amp, spec.cornering);
+            b.hold(1.0);
+        }
         for &ia in &spec.cambers_deg {
             for &sa in &spec.slip_angles_deg {
                 for &fz in &spec.loads_n {
@@ -245,6 +310,9 @@ pub fn ttc_run(spec: &FixtureSpec) -> FixtureRun {
         // A repeat at the first load, as TTC runs end each pressure.
         let to = State { fz_n: spec.loads_n[0], ia_deg: spec.cambers_deg[0], sa_deg: 0.0, ..b.s };
         plan(&mut b, &mut sweeps, to, false, amp);
+        if let Some(cs) = &spec.camber_sweep {
+            camber_sweep(&mut b, &mut sweeps, cs, spec.loads_n[0]);
+        }
     }
     // Unloaded at speed (wheel lifted), then the belt stops.
     b.ramp(2.0, State { fz_n: 0.0, sa_deg: 0.0, sl: 0.0, ia_deg: 0.0, ..b.s });
@@ -252,6 +320,36 @@ pub fn ttc_run(spec: &FixtureSpec) -> FixtureRun {
     b.ramp(3.0, State { v_kph: 0.0, ..b.s });
     b.hold(2.0);
     FixtureRun { table: tabulate(spec, &b.rows), sweeps }
+}
+
+/// Camber stepped through `cs.cambers_deg` at the held slip angle, then back to camber 0 and
+/// slip angle 0.
+fn camber_sweep(b: &mut Builder, sweeps: &mut Vec<PlannedSweep>, cs: &CamberSweep, fz_n: f64) {
+    let first = cs.cambers_deg.first().copied().unwrap_or(0.0);
+    // SAE in the file: the ISO-W slip angle flips.
+    b.ramp(2.0, State { fz_n, ia_deg: first, sa_deg: 0.0, ..b.s });
+    b.hold(1.0);
+    b.ramp(1.0, State { sa_deg: -cs.sa_deg, ..b.s });
+    b.hold(3.0);
+    for &ia in cs.cambers_deg.iter().skip(1) {
+        b.ramp(0.5, State { ia_deg: ia, ..b.s });
+        b.hold(3.0);
+    }
+    let mut levels = cs.cambers_deg.clone();
+    levels.sort_by(f64::total_cmp);
+    sweeps.push(PlannedSweep {
+        kind: SweepKind::Cornering,
+        conditioning: false,
+        fz_n,
+        p_kpa: b.s.p_kpa,
+        ia_deg: levels.get(levels.len() / 2).copied().unwrap_or(0.0),
+        sa_deg: cs.sa_deg,
+        camber_sweep: true,
+    });
+    b.ramp(1.0, State { sa_deg: 0.0, ..b.s });
+    b.hold(1.0);
+    b.ramp(1.0, State { ia_deg: 0.0, ..b.s });
+    b.hold(1.0);
 }
 
 fn tabulate(spec: &FixtureSpec, rows: &[(f64, State)]) -> ChannelTable {
@@ -282,7 +380,10 @@ fn tabulate(spec: &FixtureSpec, rows: &[(f64, State)]) -> ChannelTable {
         let v = s.v_kph + if s.v_kph > 0.0 { nz.normal(0.05) } else { 0.0 };
         let omega = v / 3.6 / re * (1.0 + kappa);
         let rolling = s.v_kph > 1.0;
-        let sr = if rolling { kappa - 0.01 + nz.normal(0.006) } else { -0.9 + nz.normal(0.01) };
+        // The rig's SR grows with slip angle and load while the wheel rolls free (−0.01 at small
+        // angles, about −0.07 at 12° and 2 kN), besides its offset and noise.
+        let sr_free = -0.01 - 0.07 * (s.sa_deg / 12.0).powi(2) * (fz / 2000.0);
+        let sr = if rolling { kappa + sr_free + nz.normal(0.006) } else { -0.9 + nz.normal(0.01) };
         let temp = 45.0 + 11.0 * t / t_end + if spec.cornering { 0.0 } else { 40.0 * t / t_end - 7.0 };
         // SAE as written: FY, FZ, SA, MZ flip.
         let vals = [
@@ -318,30 +419,61 @@ fn tabulate(spec: &FixtureSpec, rows: &[(f64, State)]) -> ChannelTable {
         "ET", "V", "N", "SA", "IA", "RL", "RE", "P", "FX", "FY", "FZ", "MX", "MZ", "NFX", "NFY", "RST", "TSTI", "TSTC",
         "TSTO", "AMBTMP", "SR", "SL",
     ];
-    let units = [
-        "s", "kph", "rpm", "deg", "deg", "cm", "cm", "kPa", "N", "N", "N", "N-m", "N-m", "none", "none", "degC",
-        "degC", "degC", "degC", "degC", "none", "none",
-    ];
+    let units = units_of(spec.units);
+    if spec.units == UnitStyle::Imperial {
+        // Written in US units: divide by the unit's size (temperatures: to °F).
+        let scale = |c: &mut Vec<f64>, k: f64| c.iter_mut().for_each(|v| *v /= k);
+        scale(&mut c[1], 1.609_344); // V mph
+        scale(&mut c[5], 2.54); // RL in
+        scale(&mut c[6], 2.54); // RE in
+        scale(&mut c[7], 6.894_757_293_168); // P psi
+        for k in [8, 9, 10] {
+            scale(&mut c[k], 4.448_221_615_260_5); // lbf
+        }
+        for k in [15, 16, 17, 18] {
+            c[k].iter_mut().for_each(|v| *v = *v * 9.0 / 5.0 + 32.0);
+        }
+    }
     let mut t = ChannelTable {
         source: "fixture".into(),
-        title: Some(format!(
-            "TIRF Data File: Project 0000; Run {:03}; synthetic {}; Tire_Name=Fixture 20.5x7.0-13, R25B; Rim_Width=7.0",
-            spec.seed,
-            if spec.cornering { "cornering" } else { "drive/brake/combined" }
-        )),
-        tire_id: Some("Fixture 20.5x7.0-13, R25B".into()),
-        test_id: Some(if spec.cornering {
-            "Cornering, Various pressures".into()
+        title: Some(if spec.older_round {
+            format!("TIRF Data File: Project 1320; Run {}", 50 + spec.seed)
         } else {
-            "Drive/Brake/Combined, 12psi".into()
+            format!(
+                "TIRF Data File: Project 0000; Run {:03}; synthetic {}; Tire_Name=Fixture 20.5x7.0-13, R25B; Rim_Width=7.0",
+                spec.seed,
+                if spec.cornering { "cornering" } else { "drive/brake/combined" }
+            )
+        }),
+        tire_id: (!spec.older_round).then(|| "Fixture 20.5x7.0-13, R25B".into()),
+        test_id: (!spec.older_round).then(|| {
+            if spec.cornering { "Cornering, Various pressures".into() } else { "Drive/Brake/Combined, 12psi".into() }
         }),
         columns: Vec::new(),
     };
     for (k, (name, unit)) in names.iter().zip(units).enumerate() {
-        if *name == "SL" && !spec.with_sl {
+        if (*name == "SL" && (!spec.with_sl || spec.older_round)) || (*name == "NFX" && spec.older_round) {
             continue;
         }
         t.push(name, unit, std::mem::take(&mut c[k]));
     }
     t
+}
+
+/// The units line of a round.
+fn units_of(style: UnitStyle) -> [&'static str; 22] {
+    match style {
+        UnitStyle::Ttc => [
+            "s", "kph", "rpm", "deg", "deg", "cm", "cm", "kPa", "N", "N", "N", "N-m", "N-m", "none", "none", "degC",
+            "degC", "degC", "degC", "degC", "none", "none",
+        ],
+        UnitStyle::LaterRound => [
+            "sec", "kph", "rpm", "deg", "deg", "cm", "cm", "kPa", "N", "N", "N", "Nm", "Nm", "none", "none", "deg C",
+            "deg C", "deg C", "deg C", "deg F", "none", "SAE",
+        ],
+        UnitStyle::Imperial => [
+            "s", "mph", "rpm", "deg", "deg", "in", "in", "psi", "lbf", "lbf", "lbf", "N-m", "N-m", "none", "none",
+            "degF", "degF", "degF", "degF", "degF", "none", "none",
+        ],
+    }
 }
