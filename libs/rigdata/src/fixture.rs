@@ -477,3 +477,85 @@ fn units_of(style: UnitStyle) -> [&'static str; 22] {
         ],
     }
 }
+
+/// One quirk of a real test round, as a synthetic run that has it.
+#[derive(Debug, Clone)]
+pub struct QuirkFixture {
+    /// File name (`.dat` or `.mat`).
+    pub file: &'static str,
+    /// The quirk, as `../shared/real-rig-data.md` describes it.
+    pub quirk: &'static str,
+    /// The run.
+    pub spec: FixtureSpec,
+}
+
+/// Every quirk of other rounds' files, one synthetic run each (`tyrerig export quirk-fixtures`,
+/// `tests/quirks.rs`).
+pub fn quirk_fixtures() -> Vec<QuirkFixture> {
+    let camber = CamberSweep { sa_deg: 1.8, cambers_deg: vec![0.0, 1.0, 2.0, 3.0, 4.0] };
+    vec![
+        QuirkFixture {
+            file: "later_round_drive_brake.dat",
+            quirk: "units spelled sec, Nm, deg C, deg F (AMBTMP) and SAE (SL)",
+            spec: FixtureSpec { units: UnitStyle::LaterRound, ..FixtureSpec::drive_brake() },
+        },
+        QuirkFixture {
+            file: "later_round_cornering.mat",
+            quirk: "a .mat file with no units at all",
+            spec: FixtureSpec { units: UnitStyle::LaterRound, ..FixtureSpec::cornering() },
+        },
+        QuirkFixture {
+            file: "us_units_cornering.dat",
+            quirk: "mph, in, psi, lbf, degF where the file says so",
+            spec: FixtureSpec { units: UnitStyle::Imperial, ..FixtureSpec::cornering() },
+        },
+        QuirkFixture {
+            file: "older_round_cornering_camber.dat",
+            quirk: "no SL/NFX/testid, SR not a slip ratio while cornering, load wandering ±15 %, camber sweeps at 1.8°",
+            spec: FixtureSpec {
+                older_round: true,
+                fz_wander: 0.15,
+                camber_sweep: Some(camber.clone()),
+                ..FixtureSpec::cornering()
+            },
+        },
+        QuirkFixture {
+            file: "load_wander_cornering.dat",
+            quirk: "load wandering ±20 % around its setpoint during slip-angle sweeps",
+            spec: FixtureSpec { fz_wander: 0.2, ..FixtureSpec::cornering() },
+        },
+        QuirkFixture {
+            file: "camber_sweeps_cornering.dat",
+            quirk: "camber stepped 0–4° at a held slip angle of 1.8°, cornering at cambers 0 and 2°",
+            spec: FixtureSpec { cambers_deg: vec![0.0, 2.0], camber_sweep: Some(camber), ..FixtureSpec::cornering() },
+        },
+        QuirkFixture {
+            file: "pure_longitudinal_065.dat",
+            quirk: "pure longitudinal sweeps at slip angle 0 to slip ratio ±0.65",
+            spec: pure_longitudinal(false),
+        },
+        QuirkFixture {
+            file: "older_round_pure_longitudinal_065.dat",
+            quirk: "pure longitudinal to ±0.65 with only SR (the wheel driven and braked)",
+            spec: pure_longitudinal(true),
+        },
+        QuirkFixture {
+            file: "warmup_drive_brake.dat",
+            quirk: "five full warm-up sweeps at 1,100 N opening a drive/brake run, 1,100 N swept again later",
+            spec: FixtureSpec { loads_n: vec![660.0, 1100.0], warmup_sweeps: 5, ..FixtureSpec::drive_brake() },
+        },
+    ]
+}
+
+/// Pure longitudinal sweeps to ±0.65 at three loads, slip angle and camber 0.
+pub fn pure_longitudinal(older_round: bool) -> FixtureSpec {
+    FixtureSpec {
+        loads_n: vec![1100.0, 660.0, 1540.0],
+        cambers_deg: vec![0.0],
+        slip_angles_deg: vec![0.0],
+        kappa_reach: 0.65,
+        sweep_s: 8.0,
+        older_round,
+        ..FixtureSpec::drive_brake()
+    }
+}

@@ -123,9 +123,23 @@ pub enum ForceUnit {
     Lbf,
 }
 
+/// How the units line is spelled: test rounds differ (`../shared/real-rig-data.md`).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum UnitSpelling {
+    /// `s kph rpm deg cm kPa N N-m none degC` (AMBTMP °F under a `degC` label).
+    #[default]
+    Ttc,
+    /// A later round: `sec`, `Nm`, `deg C`, AMBTMP honestly `deg F`, SL `SAE`.
+    LaterRound,
+    /// US units: V in mph, RL and RE in in, P in psi, forces in lbf, temperatures in degF.
+    Us,
+}
+
 /// How to write the run.
 #[derive(Debug, Clone, PartialEq)]
 pub struct TtcExportOptions {
+    /// Spelling (and for US units, the values) of the units line.
+    pub units: UnitSpelling,
     /// Output rate [Hz]: 50 (older rounds) or 100; must divide the log's sample rate.
     pub rate_hz: u32,
     /// Unit of `P`.
@@ -162,6 +176,7 @@ pub struct TtcExportOptions {
 impl Default for TtcExportOptions {
     fn default() -> Self {
         Self {
+            units: UnitSpelling::Ttc,
             rate_hz: 50,
             pressure_unit: PressureUnit::Kpa,
             force_unit: ForceUnit::N,
@@ -361,7 +376,7 @@ pub fn export_ttc(run: &VirtualRun, opts: &TtcExportOptions) -> Result<ChannelTa
         ("SR", "none", true),
         ("SL", "none", opts.with_sl),
     ];
-    let columns = layout
+    let mut columns: Vec<Column> = layout
         .iter()
         .filter(|(_, _, on)| *on)
         .map(|(name, unit, _)| Column {
@@ -370,6 +385,7 @@ pub fn export_ttc(run: &VirtualRun, opts: &TtcExportOptions) -> Result<ChannelTa
             values: ch.remove(name).unwrap_or_default(),
         })
         .collect();
+    respell(&mut columns, opts.units);
 
     let tire_name = opts
         .tire_name
@@ -396,6 +412,32 @@ pub fn export_ttc(run: &VirtualRun, opts: &TtcExportOptions) -> Result<ChannelTa
         test_id: opts.with_test_id.then_some(test_id),
         columns,
     })
+}
+
+/// Rewrites the units line in a round's spelling; for US units converts the values too.
+fn respell(columns: &mut [Column], spelling: UnitSpelling) {
+    for c in columns.iter_mut() {
+        let (unit, convert): (&str, Option<fn(f64) -> f64>) = match (spelling, c.name.as_str(), c.unit.as_str()) {
+            (UnitSpelling::Ttc, ..) => continue,
+            (UnitSpelling::LaterRound, "ET", _) => ("sec", None),
+            (UnitSpelling::LaterRound, "MX" | "MZ", _) => ("Nm", None),
+            (UnitSpelling::LaterRound, "AMBTMP", _) => ("deg F", None),
+            (UnitSpelling::LaterRound, _, "degC") => ("deg C", None),
+            (UnitSpelling::LaterRound, "SL", _) => ("SAE", None),
+            (UnitSpelling::Us, "V", _) => ("mph", Some(|v| v / 1.609_344)),
+            (UnitSpelling::Us, "RL" | "RE", _) => ("in", Some(|v| v / 2.54)),
+            (UnitSpelling::Us, "P", "kPa") => ("psi", Some(|v| v / KPA_PER_PSI)),
+            (UnitSpelling::Us, "FX" | "FY" | "FZ", "N") => ("lbf", Some(|v| v / N_PER_LBF)),
+            // AMBTMP is already written in °F.
+            (UnitSpelling::Us, "AMBTMP", _) => ("degF", None),
+            (UnitSpelling::Us, _, "degC") => ("degF", Some(|v| v * 9.0 / 5.0 + 32.0)),
+            _ => continue,
+        };
+        c.unit = unit.to_owned();
+        if let Some(f) = convert {
+            c.values.iter_mut().for_each(|v| *v = f(*v));
+        }
+    }
 }
 
 /// Means of `per_row` consecutive samples (the rig's DAQ filters before it decimates).

@@ -5,7 +5,10 @@
 
 use std::path::PathBuf;
 
-use rigdata::virtual_export::{ForceUnit, PressureUnit, TtcExportOptions, VirtualRun, export_ttc, to_dat_compact};
+use rigdata::import::{FileFormat, ReadOptions, read_bytes};
+use rigdata::virtual_export::{
+    ForceUnit, PressureUnit, TtcExportOptions, UnitSpelling, VirtualRun, export_ttc, to_dat_compact,
+};
 use rigdata::{ChannelTable, Column};
 use rigsim::{Effects, RigConfig, RigSample, RigSetpoint, VirtualRig, VirtualTyre};
 use tyre_msgs::ProcedureState;
@@ -255,6 +258,55 @@ fn options_drop_channels_and_change_units() {
     let fz_lbf = 0.5 * (col(&t, "FZ")[200] + col(&t, "FZ")[201]);
     assert!((fz_lbf * 4.448_221_615_260_5 - fz_n).abs() < 1e-6 * fz_n.abs());
     assert!(export_ttc(&run, &TtcExportOptions { rate_hz: 200, ..TtcExportOptions::default() }).is_err());
+}
+
+#[test]
+fn unit_spellings_of_other_rounds_read_back_to_the_same_sweeps() {
+    // `--units later-round` (sec, Nm, deg C, deg F, SAE) and `--units us` (mph, in, psi, lbf,
+    // degF): the reader finds the same sweeps with the same cells and samples.
+    let (run, _) = programme();
+    let read = |spelling: UnitSpelling| {
+        let t = export_ttc(&run, &TtcExportOptions { units: spelling, ..TtcExportOptions::default() }).unwrap();
+        let text = rigdata::table::to_dat(&t, rigdata::table::DatLayout { decimals: 9, crlf: true });
+        let (d, r) = read_bytes(text.as_bytes(), "spelling.dat", FileFormat::Dat, &ReadOptions::default())
+            .unwrap_or_else(|e| panic!("{spelling:?}: {e}"));
+        (t, d, r)
+    };
+    let (_, base, _) = read(UnitSpelling::Ttc);
+    assert!(!base.segments.is_empty());
+    for spelling in [UnitSpelling::LaterRound, UnitSpelling::Us] {
+        let (t, d, r) = read(spelling);
+        let unit = |n: &str| t.column(n).unwrap().unit.clone();
+        match spelling {
+            UnitSpelling::LaterRound => {
+                assert_eq!(
+                    [unit("ET"), unit("MZ"), unit("TSTC"), unit("AMBTMP"), unit("SL")],
+                    ["sec", "Nm", "deg C", "deg F", "SAE"]
+                )
+            }
+            _ => assert_eq!(
+                [unit("V"), unit("RL"), unit("P"), unit("FZ"), unit("TSTC")],
+                ["mph", "in", "psi", "lbf", "degF"]
+            ),
+        }
+        assert!(!r.warnings.iter().any(|w| w.message.contains("surely degF")), "{spelling:?}: {:?}", r.warnings);
+        assert_eq!(d.segments.len(), base.segments.len(), "{spelling:?}");
+        for (a, b) in d.segments.iter().zip(&base.segments) {
+            assert_eq!((&a.sweep, a.samples.len()), (&b.sweep, b.samples.len()), "{spelling:?}");
+            for (x, y) in a.samples.iter().zip(&b.samples) {
+                for (u, v) in [
+                    (x.fz_n, y.fz_n),
+                    (x.p_pa, y.p_pa),
+                    (x.vx_mps, y.vx_mps),
+                    (x.rl_m, y.rl_m),
+                    (x.temp_c, y.temp_c),
+                    (x.kappa, y.kappa),
+                ] {
+                    assert!((u - v).abs() <= 1e-6 * v.abs().max(1.0), "{spelling:?} {}: {u} vs {v}", a.sweep);
+                }
+            }
+        }
+    }
 }
 
 #[test]

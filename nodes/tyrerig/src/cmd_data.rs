@@ -19,6 +19,16 @@ pub enum ExportCmd {
     Mat(ExportMatArgs),
     /// Write a virtual rig run as a Calspan TIRF / TTC-style .dat with every quirk of real files
     Ttc(crate::cmd_export_ttc::ExportTtcArgs),
+    /// Write one small synthetic TTC-style file per quirk of other test rounds (unit spellings,
+    /// US units, no SL, wandering load, camber sweeps, slip ratio to 0.65, warm-up sweeps)
+    QuirkFixtures(ExportQuirksArgs),
+}
+
+/// Arguments of `tyrerig export quirk-fixtures`.
+#[derive(Debug, Args)]
+pub struct ExportQuirksArgs {
+    /// Output folder (created if missing)
+    pub dir: PathBuf,
 }
 
 /// Arguments of `tyrerig export tydex`.
@@ -150,7 +160,31 @@ pub fn run_export(cmd: ExportCmd) -> Result<()> {
             Ok(())
         }
         ExportCmd::Ttc(a) => crate::cmd_export_ttc::run(a),
+        ExportCmd::QuirkFixtures(a) => export_quirks(&a.dir),
     }
+}
+
+/// Writes `rigdata::fixture::quirk_fixtures()` into `dir`, `.dat` or `.mat` by name.
+fn export_quirks(dir: &Path) -> Result<()> {
+    std::fs::create_dir_all(dir).with_context(|| format!("creating {}", dir.display()))?;
+    for q in rigdata::fixture::quirk_fixtures() {
+        let run = rigdata::fixture::ttc_run(&q.spec);
+        let out = dir.join(q.file);
+        if q.file.ends_with(".mat") {
+            rigdata::mat::write_mat(&out, &run.table, &MatWriteOptions::default())?;
+        } else {
+            std::fs::write(&out, rigdata::virtual_export::to_dat_compact(&run.table))
+                .with_context(|| format!("writing {}", out.display()))?;
+        }
+        eprintln!(
+            "wrote {} ({} rows, {} sweeps planned): {}",
+            out.display(),
+            run.table.rows(),
+            run.sweeps.len(),
+            q.quirk
+        );
+    }
+    Ok(())
 }
 
 /// A measured file's raw table (any format).

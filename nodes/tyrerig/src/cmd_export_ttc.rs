@@ -5,7 +5,21 @@ use std::path::PathBuf;
 
 use anyhow::{Context, Result};
 use clap::Args;
-use rigdata::virtual_export::{ForceUnit, PressureUnit, TtcExportOptions, VirtualRun, export_ttc, to_dat_compact};
+use clap::ValueEnum;
+use rigdata::virtual_export::{
+    ForceUnit, PressureUnit, TtcExportOptions, UnitSpelling, VirtualRun, export_ttc, to_dat_compact,
+};
+
+/// Spelling of the units line (`--units`).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
+pub enum UnitsArg {
+    /// s, kph, rpm, deg, cm, kPa, N, N-m, none, degC (AMBTMP °F under a degC label)
+    Ttc,
+    /// A later round: sec, Nm, deg C, AMBTMP in deg F, SL in SAE
+    LaterRound,
+    /// US units: mph, in, psi, lbf, degF
+    Us,
+}
 
 /// Arguments of `tyrerig export ttc`.
 #[derive(Debug, Args)]
@@ -24,6 +38,9 @@ pub struct ExportTtcArgs {
     /// Forces in lbf instead of N
     #[arg(long)]
     pub lbf: bool,
+    /// Units line as a test round spells it
+    #[arg(long, value_enum, default_value_t = UnitsArg::Ttc)]
+    pub units: UnitsArg,
     /// Leave out the testid (as some files do)
     #[arg(long)]
     pub no_testid: bool,
@@ -51,6 +68,11 @@ pub struct ExportTtcArgs {
 pub fn run(a: ExportTtcArgs) -> Result<()> {
     let run = VirtualRun::from_log(&a.log)?;
     let opts = TtcExportOptions {
+        units: match a.units {
+            UnitsArg::Ttc => UnitSpelling::Ttc,
+            UnitsArg::LaterRound => UnitSpelling::LaterRound,
+            UnitsArg::Us => UnitSpelling::Us,
+        },
         rate_hz: a.rate_hz,
         pressure_unit: if a.psi { PressureUnit::Psi } else { PressureUnit::Kpa },
         force_unit: if a.lbf { ForceUnit::Lbf } else { ForceUnit::N },

@@ -156,3 +156,44 @@ fn drive_brake_run_exports_with_options_and_a_climbing_tread_temperature() {
     assert_eq!(d.cols["AMBTMP"].0, "degC");
     assert!(d.col("AMBTMP").iter().all(|t| (84.0..88.0).contains(t)));
 }
+
+/// `tyrerig export quirk-fixtures` writes one file per quirk of other test rounds, and
+/// `tyrerig inspect --json` on each finds the planned sweeps by kind, the conditioning ones,
+/// and accounts for every row.
+#[test]
+fn inspect_reads_every_quirk_fixture_and_accounts_for_every_row() {
+    let dir = scratch("quirks");
+    tyrerig(&["export", "quirk-fixtures", dir.to_str().unwrap()]);
+    for q in rigdata::fixture::quirk_fixtures() {
+        let path = dir.join(q.file);
+        let out = Command::new(env!("CARGO_BIN_EXE_tyrerig"))
+            .args(["inspect", path.to_str().unwrap(), "--json"])
+            .output()
+            .expect("run tyrerig");
+        assert!(out.status.success(), "{}: {}", q.file, String::from_utf8_lossy(&out.stderr));
+        let v: serde_json::Value = serde_json::from_slice(&out.stdout).expect("json");
+        let f = &v["files"][0];
+        let n = |k: &str| f[k].as_u64().unwrap_or_else(|| panic!("{}: {k}", q.file));
+        let excluded: u64 = f["excluded"].as_array().unwrap().iter().map(|e| e[1].as_u64().unwrap()).sum();
+        assert_eq!(n("rows_in_sweeps") + n("rows_in_conditioning") + excluded, n("rows"), "{}", q.file);
+        // The sweeps the run was made with, by kind (SR's noise hides the short 0.04
+        // conditioning sweeps of an SR-only drive/brake file: planned, excluded either way).
+        let plan = rigdata::fixture::ttc_run(&q.spec).sweeps;
+        let sr_only = q.spec.older_round && !q.spec.cornering;
+        let kind_of = |p: &rigdata::fixture::PlannedSweep| {
+            if p.camber_sweep { "camber".to_owned() } else { p.kind.name().to_owned() }
+        };
+        let mut planned: Vec<(String, bool)> =
+            plan.iter().filter(|p| !(sr_only && p.conditioning)).map(|p| (kind_of(p), p.conditioning)).collect();
+        let mut found: Vec<(String, bool)> = f["sweeps"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .map(|s| (s["kind"].as_str().unwrap().to_owned(), s["conditioning"].as_bool().unwrap()))
+            .filter(|s| !(sr_only && s.1))
+            .collect();
+        planned.sort();
+        found.sort();
+        assert_eq!(found, planned, "{}: {}", q.file, q.quirk);
+    }
+}
