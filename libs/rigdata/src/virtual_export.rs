@@ -414,10 +414,13 @@ pub fn export_ttc(run: &VirtualRun, opts: &TtcExportOptions) -> Result<ChannelTa
     })
 }
 
+/// A unit as a round spells it, and the conversion of the values from the TTC unit if any.
+type Respelled = (&'static str, Option<fn(f64) -> f64>);
+
 /// Rewrites the units line in a round's spelling; for US units converts the values too.
 fn respell(columns: &mut [Column], spelling: UnitSpelling) {
     for c in columns.iter_mut() {
-        let (unit, convert): (&str, Option<fn(f64) -> f64>) = match (spelling, c.name.as_str(), c.unit.as_str()) {
+        let (unit, convert): Respelled = match (spelling, c.name.as_str(), c.unit.as_str()) {
             (UnitSpelling::Ttc, ..) => continue,
             (UnitSpelling::LaterRound, "ET", _) => ("sec", None),
             (UnitSpelling::LaterRound, "MX" | "MZ", _) => ("Nm", None),
