@@ -858,6 +858,55 @@ mod tests {
         assert_eq!(split_at_reach_changes(&y, (0, y.len() - 1), 1.0).len(), 1);
     }
 
+    /// 60 s at 50 Hz rolling at 40 kph, 2 kN, slip angle held at `sa_deg`, with `SR` going
+    /// 0 → −0.08 → +0.08 → 0 over 8 s in the middle and FX = `fx_per_sr` × FZ × SR.
+    fn held_run(sa_deg: f64, fx_per_sr: f64) -> Signals {
+        let n = 3000;
+        let sr: Vec<f64> = (0..n)
+            .map(|i| {
+                let t = (i as f64 - 1200.0) / 400.0; // 0..1 over the 8 s excursion
+                if (0.0..1.0).contains(&t) { -0.08 * (std::f64::consts::TAU * t).sin() } else { -0.01 }
+            })
+            .collect();
+        Signals {
+            time_s: (0..n).map(|i| i as f64 * 0.02).collect(),
+            v_mps: Some(vec![11.1; n]),
+            omega_radps: vec![43.0; n],
+            alpha_rad: vec![sa_deg.to_radians(); n],
+            gamma_rad: vec![0.0; n],
+            rl_m: vec![0.25; n],
+            p_pa: vec![83_000.0; n],
+            fx_n: sr.iter().map(|k| fx_per_sr * 2000.0 * k).collect(),
+            fy_n: vec![-3000.0; n],
+            fz_n: vec![2000.0; n],
+            mx_nm: vec![0.0; n],
+            my_nm: vec![0.0; n],
+            mz_nm: vec![0.0; n],
+            kappa: sr,
+            temp_inner_c: vec![50.0; n],
+            temp_centre_c: vec![50.0; n],
+            temp_outer_c: vec![50.0; n],
+            road_temp_c: vec![30.0; n],
+            ambient_c: None,
+        }
+    }
+
+    #[test]
+    fn sr_moving_is_a_slip_ratio_sweep_only_where_the_wheel_is_driven_or_braked() {
+        // Free rolling at 12°: SR swings (it grows with slip angle and load) with FX about 0.
+        let free = find_sweeps(&held_run(12.0, 0.2), KappaSource::EffectiveRadius, None, &SweepOptions::default());
+        assert!(free.sweeps.is_empty(), "{:?}", free.sweeps);
+        let sr_rows = free.excluded.iter().find(|e| e.0 == Exclusion::SrFreeRolling).map(|e| e.1).unwrap_or(0);
+        assert!(sr_rows > 300, "{:?}", free.excluded);
+        // Driven and braked (FX up to 1.6 FZ at SR 0.08): a combined sweep at 12°.
+        let driven = find_sweeps(&held_run(12.0, 20.0), KappaSource::EffectiveRadius, None, &SweepOptions::default());
+        assert_eq!(driven.sweeps.len(), 1, "{:?}", driven.excluded);
+        assert_eq!((driven.sweeps[0].swept, driven.sweeps[0].cell.kind), (Swept::SlipRatio, SweepKind::Combined));
+        // With SL the rule does not apply: SL moves only when the rig drives the wheel.
+        let sl = find_sweeps(&held_run(0.0, 0.2), KappaSource::LoadedRadius, None, &SweepOptions::default());
+        assert_eq!(sl.sweeps.len(), 1);
+    }
+
     #[test]
     fn unsteady_flags_a_ramp_not_noise() {
         let x: Vec<f64> = (0..600)
