@@ -31,6 +31,7 @@ pub mod identify;
 pub mod logs;
 pub mod metrics;
 pub mod physics;
+pub mod plots;
 pub mod prediction;
 pub mod report;
 pub mod stages;

@@ -88,6 +88,9 @@ fn race_brush_tyre_ttc_runs_fit_physical_and_within_the_limits() {
     let ppx = fx_held.iter().find(|h| h["key"] == "PPX1").unwrap_or_else(|| panic!("PPX1 not held: {fx_held:?}"));
     assert!(ppx["reason"].as_str().is_some_and(|r| r.contains("pressure")), "{ppx}");
 
+    mz_combined_within_target(&json, "race");
+    plots_engineers_read(&dir.join("report"));
+
     // The repeat run on the second specimen scores the model too.
     let validation = json["validation"].as_array().expect("validation");
     assert_eq!(validation.len(), 1, "{validation:?}");
@@ -97,6 +100,47 @@ fn race_brush_tyre_ttc_runs_fit_physical_and_within_the_limits() {
         let v = row["nrmse_pct"].as_f64().expect("nrmse");
         assert!(v.is_finite() && v < 10.0, "{name} on the repeat run: {v:.2} %");
     }
+}
+
+/// The combined aligning moment on held-out sweeps: ≤ 8 % NRMSE and ≤ 1.5× the tyre's pure MZ
+/// (issue 31). The race tyre's was 6.32 % against MZ pure's 3.58 % (1.77×) while only the s-arm
+/// was fitted; with the trail and residual torque refined jointly with mz_pure's points it is
+/// 4.27 % against 3.57 %.
+fn mz_combined_within_target(json: &serde_json::Value, tyre: &str) {
+    let heldout = |name: &str| {
+        json["stages"]
+            .as_array()
+            .and_then(|a| a.iter().find(|s| s["stage"] == name))
+            .and_then(|s| s["heldout_nrmse_pct"].as_f64())
+            .unwrap_or(f64::NAN)
+    };
+    let (combined, pure) = (heldout("mz_combined"), heldout("mz_pure"));
+    assert!(combined <= 8.0, "{tyre}: MZ combined held-out {combined:.2} % > 8 %");
+    assert!(combined <= 1.5 * pure, "{tyre}: MZ combined held-out {combined:.2} % > 1.5 × MZ pure's {pure:.2} %");
+}
+
+/// The report's plots: each stage over the slip it sweeps with its residuals, the friction ellipse.
+fn plots_engineers_read(report: &Path) {
+    for stem in ["mz_combined_mz", "fx_combined_fx", "fy_pure_fy", "friction_ellipse", "mz_combined_mz_residuals"] {
+        for ext in ["png", "svg"] {
+            let path = report.join(format!("{stem}.{ext}"));
+            assert!(path.metadata().is_ok_and(|m| m.len() > 1000), "{} missing or empty", path.display());
+        }
+    }
+    let md = std::fs::read_to_string(report.join("report.md")).expect("report.md");
+    assert!(md.contains("one panel per held slip angle"), "report.md does not explain the plots");
+}
+
+/// The brush road tyre's runs: MZ combined within the target on held-out sweeps.
+#[test]
+fn road_brush_tyre_mz_combined_within_target() {
+    let dir = PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join("brush_fit_road");
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).expect("scratch dir");
+    let (cornering, drive_brake) = (fixture("road_cornering.dat"), fixture("road_drive_brake.dat"));
+    let (json, _) = fit(&dir, "road.tir", &[&cornering, &drive_brake, "--folds", "3"]);
+    assert!(json["nonphysical_stages"].as_array().is_some_and(Vec::is_empty), "{}", json["nonphysical_stages"]);
+    mz_combined_within_target(&json, "road");
 }
 
 /// A drive/brake/combined run alone (no cornering sweeps): the pure lateral stages have no data,

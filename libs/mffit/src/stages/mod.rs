@@ -34,6 +34,7 @@ mod mz_pure;
 pub mod nominal;
 mod radius;
 mod relaxation;
+pub mod states;
 pub mod steps;
 
 pub use context::{Ctx, Resampled, StagePoints};
@@ -405,6 +406,8 @@ pub struct StageData {
     pub points: Vec<Point>,
     /// Segment of each point.
     pub groups: Vec<usize>,
+    /// Test time and tread temperature of each point (for the report's residual plots).
+    pub states: Vec<states::PointState>,
 }
 
 /// The outcome of [`fit`].
@@ -575,6 +578,7 @@ pub fn fit(data: &Dataset, opts: &FitOptions) -> Result<FitResult, FitError> {
             stage_data.push(StageData {
                 stage: stage.name().into(),
                 channel: stage.channel(),
+                states: states::of(&ctx, &selection),
                 points: selection.points,
                 groups: selection.groups,
             });
@@ -635,6 +639,7 @@ pub fn fit(data: &Dataset, opts: &FitOptions) -> Result<FitResult, FitError> {
                     stage_data.push(StageData {
                         stage: stage.name().into(),
                         channel: stage.channel(),
+                        states: states::of(&ctx, &selection),
                         points: selection.points.clone(),
                         groups: selection.groups.clone(),
                     });
@@ -705,7 +710,7 @@ fn note_refined_later(stages: &mut [StageReport], params: &TyreParams) {
         let rep = &mut head[i];
         let mut later: Vec<String> = Vec::new();
         for e in &rep.estimates {
-            if let Some(by) = tail.iter().find(|t| t.keys.iter().any(|k| *k == e.key)) {
+            if let Some(by) = tail.iter().find(|t| t.keys.contains(&e.key)) {
                 let now = params.get(&e.key).unwrap_or(f64::NAN);
                 later.push(format!("{} {:.6} → {now:.6} ({})", e.key, e.value, by.stage));
             }

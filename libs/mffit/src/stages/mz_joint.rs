@@ -33,10 +33,8 @@ use crate::stages::{Stage, StageReport};
 /// stiffness, shape and offset; the residual torque and its decay (Br = QBZ10·By·Cy); the
 /// camber terms of both (the drive/brake run usually holds the cambers). Pressure terms stay
 /// with `mz_pure` (a drive/brake run is at one pressure).
-pub const JOINT: [&str; 21] = [
-    "QDZ1", "QDZ2", "QBZ1", "QBZ2", "QBZ3", "QCZ1", "QEZ1", "QEZ2", "QHZ1", "QHZ2", "QDZ6", "QDZ7", "QBZ10", "QDZ3",
-    "QDZ4", "QDZ8", "QDZ9", "QBZ4", "QBZ5", "QHZ3", "QHZ4",
-];
+pub const JOINT: [&str; 12] =
+    ["QDZ1", "QDZ2", "QBZ1", "QCZ1", "QEZ1", "QHZ1", "QDZ6", "QDZ7", "QBZ10", "QDZ3", "QDZ8", "QHZ3"];
 /// The arm's keys (`mz_combined`'s own).
 const ARM: [&str; 4] = ["SSZ1", "SSZ2", "SSZ3", "SSZ4"];
 /// Largest MZ pure NRMSE after the refinement, as a multiple of before it: the pure points are
@@ -50,7 +48,7 @@ const MIN_GAIN: f64 = 0.02;
 /// gains most; where they disagree (the drive/brake run hotter or more worn) the pure points
 /// must pull harder. Measured on the brush race tyre's TTC-style runs: weight 1 took MZ
 /// combined 6.17 → 4.99 % but MZ pure 3.12 → 3.47 %; weight 10 gave 5.38 % and 3.15 %.
-const PURE_WEIGHTS: [f64; 4] = [1.0, 3.0, 10.0, 30.0];
+const PURE_WEIGHTS: [f64; 6] = [1.0, 2.0, 3.0, 5.0, 10.0, 30.0];
 /// Points `mz_pure` needs (its own minimum): below it there are no pure points to protect and
 /// `mz_combined` fits the pure trail itself.
 const MZ_PURE_MIN_POINTS: usize = 50;
