@@ -74,6 +74,9 @@ pub struct FixtureSpec {
     /// Full-reach warm-up sweeps opening a drive/brake run at the last load (a cell the run
     /// sweeps again later) instead of the short conditioning sweeps; 0 for none.
     pub warmup_sweeps: usize,
+    /// The load (or slip angle) for the next cell set right as a sweep comes back to zero, with
+    /// no rolling at the cell after it (as real runs often do).
+    pub no_settle_after_sweeps: bool,
     /// Slip-ratio reach of the drive/brake sweeps (0.2 in TTC runs, 0.65 in pure longitudinal
     /// runs of some rounds).
     pub kappa_reach: f64,
@@ -119,6 +122,7 @@ impl FixtureSpec {
             fz_wander: 0.0,
             camber_sweep: None,
             warmup_sweeps: 0,
+            no_settle_after_sweeps: false,
             kappa_reach: 0.2,
         }
     }
@@ -141,6 +145,7 @@ impl FixtureSpec {
             fz_wander: 0.0,
             camber_sweep: None,
             warmup_sweeps: 0,
+            no_settle_after_sweeps: false,
             kappa_reach: 0.2,
         }
     }
@@ -260,7 +265,9 @@ pub fn ttc_run(spec: &FixtureSpec) -> FixtureRun {
         b.ramp(2.0, to);
         b.hold(1.5);
         b.sweep(if conditioning { spec.sweep_s * 0.5 } else { spec.sweep_s }, amp, spec.cornering);
-        b.hold(1.0);
+        if !spec.no_settle_after_sweeps {
+            b.hold(1.0);
+        }
         let kind = if spec.cornering {
             SweepKind::Cornering
         } else if to.sa_deg.abs() < 1.0 {
@@ -521,8 +528,8 @@ pub fn quirk_fixtures() -> Vec<QuirkFixture> {
         },
         QuirkFixture {
             file: "load_wander_cornering.dat",
-            quirk: "load wandering ±20 % around its setpoint during slip-angle sweeps",
-            spec: FixtureSpec { fz_wander: 0.2, ..FixtureSpec::cornering() },
+            quirk: "load wandering ±20 % around its setpoint during slip-angle sweeps, the next load set as a sweep ends",
+            spec: FixtureSpec { fz_wander: 0.2, no_settle_after_sweeps: true, ..FixtureSpec::cornering() },
         },
         QuirkFixture {
             file: "camber_sweeps_cornering.dat",

@@ -508,9 +508,12 @@ fn fill_short_gaps(flag: &[bool], fill: usize) -> Vec<bool> {
 }
 
 /// Load flagged as moving while the slip angle sweeps is the rig's load control wandering, not a
-/// change of cell, when the load after the sweep is back at the level before it and never strays
-/// more than `max_fraction` of it: those rows are given back (the sweep stays one sweep, each
-/// point with its measured load). Real rigs of some rounds swing ±10–20 % at the sweep's ends.
+/// change of cell, up to the last row where the load is back at the level it had before the
+/// sweep (within the load tolerance) — all of it when the level after the sweep is that level
+/// too — provided it never strays more than `max_fraction` of that level: those rows are given
+/// back (the sweep stays one sweep, each point with its measured load). Real rigs of some rounds
+/// swing ±10–20 % at the sweep's ends, and often change the load for the next cell right as the
+/// sweep comes back to zero: the rows of that ramp stay a load ramp.
 fn forgive_wander(
     fz: &[f64],
     bad: &mut [bool],
@@ -536,13 +539,24 @@ fn forgive_wander(
             continue;
         }
         let before = level(s.saturating_sub(2 * w)..s, bad);
-        let after = level(e..(e + 2 * w).min(n), bad);
-        if !(before.is_finite() && after.is_finite()) || (before - after).abs() > tol(before.abs()) {
+        if !before.is_finite() {
             continue;
         }
-        let stray = fz[s..e].iter().filter(|x| x.is_finite()).fold(0.0_f64, |m, x| m.max((x - before).abs()));
+        let home = |x: f64| (x - before).abs() <= tol(before.abs());
+        let after = level(e..(e + 2 * w).min(n), bad);
+        // Up to where the wander ends: the stretch's end when the load after it is home,
+        // else its last row at home.
+        let end = if after.is_finite() && home(after) {
+            e
+        } else {
+            match (s..e).rev().find(|&r| fz[r].is_finite() && home(fz[r])) {
+                Some(r) => r + 1,
+                None => continue,
+            }
+        };
+        let stray = fz[s..end].iter().filter(|x| x.is_finite()).fold(0.0_f64, |m, x| m.max((x - before).abs()));
         if stray <= max_fraction * before.abs() {
-            bad[s..e].iter_mut().for_each(|b| *b = false);
+            bad[s..end].iter_mut().for_each(|b| *b = false);
         }
     }
 }
