@@ -429,11 +429,15 @@ impl Ctx<'_> {
         let gains = gain_per_sweep(self.ds, &self.meas, before_ho, &fit.pred_ho, &self.sigma);
         let p_value = bootstrap_p(&gains, penalty, self.cfg.bootstrap_resamples, eff as u64);
         let alpha = self.cfg.false_naming_rate / m_tests.max(1) as f64;
-        let significant = evidence >= self.cfg.min_evidence && improved + 1 >= self.fl.len() && p_value <= alpha;
+        let unphysical = self.unphysical(eff, &fit);
+        let significant = evidence >= self.cfg.min_evidence
+            && improved + 1 >= self.fl.len()
+            && p_value <= alpha
+            && unphysical.is_none();
         let reason = if evidence >= self.cfg.min_evidence && p_value > alpha {
             format!("not significant: bootstrap p = {p_value:.3} > {alpha:.4} (gain not consistent over sweeps)")
         } else {
-            String::new()
+            unphysical.unwrap_or_default()
         };
         let s = CandidateScore {
             effect: eff,
@@ -452,6 +456,33 @@ impl Ctx<'_> {
             form_corrected: fe.is_some(),
         };
         (s, Some(fit))
+    }
+
+    /// Why a fitted candidate cannot be the effect it is named after, if it cannot. Wear is
+    /// tread lost: where the loaded radius is diagnosed, a wear fit whose radius does not fall
+    /// with sliding energy by at least the radius channel's resolution over the test describes
+    /// something else with wear's variable (on the benchmark, break-in's recovery and thermal
+    /// drift were named wear).
+    fn unphysical(&self, eff: Effect, fit: &CandidateFit) -> Option<String> {
+        if eff != Effect::Wear || !self.coverage.radius {
+            return None;
+        }
+        let wear = fit.model.iter().find(|e| e.effect == Effect::Wear)?;
+        let parsed = wear.parsed();
+        let rate_mm_per_mj =
+            wear.get(&state::term_key(Effect::Wear, state::Term { factor: state::Factor::Radius, basis: 0 }));
+        let energy = self.ev.basis_at_points(Effect::Wear, 0, &parsed.choice);
+        let (lo, hi) = energy
+            .iter()
+            .filter(|v| v.is_finite())
+            .fold((f64::INFINITY, f64::NEG_INFINITY), |(l, h), &v| (l.min(v), h.max(v)));
+        let change_mm = rate_mm_per_mj * (hi - lo).max(0.0);
+        let resolution_mm = HARM_RESOLUTION[CH_RL] * 1e3;
+        (change_mm > -resolution_mm).then(|| {
+            format!(
+                "not wear: the loaded radius changes by {change_mm:+.3} mm over the test with it (tread loss needs ≤ −{resolution_mm:.2} mm)"
+            )
+        })
     }
 
     /// A whole-tyre state candidate: its discrete choice by the all-sweeps fit, its terms by

@@ -361,19 +361,10 @@ impl<'a> Evaluator<'a> {
 
     /// The choices tried for `effect`; thermal's with their reference and range from the data
     /// (the median and the 2 %/98 % quantiles of the temperature over the points); `centred`:
-    /// wear's and break-in's neutral state at their mean over the points (a base fitted to
-    /// these logs, see [`state::Choice::neutral`]).
+    /// every basis measured from its mean over the points (a base fitted to these logs, see
+    /// [`state::Choice::neutral`]).
     pub fn choice_grid(&self, effect: Effect, centred: bool) -> Vec<state::Choice> {
         let mut grid = state::Choice::grid(effect);
-        if centred && matches!(effect, Effect::Wear | Effect::BreakIn) {
-            for c in &mut grid {
-                let b = self.basis_at_points(effect, 0, c);
-                let valid: Vec<f64> = b.into_iter().filter(|v| v.is_finite()).collect();
-                if !valid.is_empty() {
-                    c.neutral = valid.iter().sum::<f64>() / valid.len() as f64;
-                }
-            }
-        }
         if effect == Effect::Thermal {
             for c in &mut grid {
                 let (temp, _) = self.choice_series(c);
@@ -385,6 +376,22 @@ impl<'a> Evaluator<'a> {
                 let at = |p: f64| v[((v.len() - 1) as f64 * p).round() as usize];
                 c.t_ref_c = at(0.5);
                 c.t_range_c = [at(state::THERMAL_RANGE_QUANTILES[0]), at(state::THERMAL_RANGE_QUANTILES[1])];
+            }
+        }
+        let centred_bases = match effect {
+            _ if !centred => 0..0,
+            Effect::Wear | Effect::BreakIn => 0..state::SHAPE_BASES,
+            // x⁰ is the level, which a fitted base has already.
+            Effect::Thermal => 1..state::THERMAL_BASES,
+            _ => 0..0,
+        };
+        for c in &mut grid {
+            for b in centred_bases.clone() {
+                let values = self.basis_at_points(effect, b as u8, c);
+                let valid: Vec<f64> = values.into_iter().filter(|v| v.is_finite()).collect();
+                if !valid.is_empty() {
+                    c.neutral[b] = valid.iter().sum::<f64>() / valid.len() as f64;
+                }
             }
         }
         grid

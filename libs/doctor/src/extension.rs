@@ -4,17 +4,24 @@
 //! ```text
 //! [TYRERIG_EXTENSIONS]
 //! $ Added by `tyrerig doctor` (docs/doctor.md). MF-Tyre 6.1 readers ignore this section.
-//! FORMAT_VERSION            = 2
+//! FORMAT_VERSION            = 3
 //! EFFECTS                   = 'thermal,wear'
 //! THERMAL_SOURCE            = 0       $ 0: grip temperature (quiet, flash fitted out); 1: laser mean
 //! THERMAL_LAG_S             = 30      $ its first-order lag
 //! THERMAL_TREF_C            = 52.3    $ x = (T_lagged − TREF)/10 K
 //! THERMAL_TMIN_C, THERMAL_TMAX_C    $ T_lagged clamped to this range (2 %/98 % of the data)
-//! THERMAL_MUY_0, _1, _2 …           $ λμy ×= exp(c0 + c1·x + c2·x²); likewise MUX, KX, KY (c0, c1),
-//!                                   $ TRAIL, MRES (c1), RL_MM (Rl += c1·x mm)
-//! WEAR_MUY, WEAR_KY, WEAR_CY, …     $ λ ×= exp(c·E), E = sliding energy [MJ]; WEAR_RL_MM: Rl += c·E mm
-//! BREAKIN_ENERGY_KJ, BREAKIN_THRESHOLD_KW, BREAKIN_MUY, …
-//!                                   $ λ ×= exp(c·r), r = exp(−E_sev/E₀), E_sev above the threshold
+//! THERMAL_NEUTRAL_1, _2             $ N1, N2: x and x² measured from them (0 for a given model)
+//! THERMAL_MUY_0, _1, _2 …           $ λμy ×= exp(c0 + c1·(x − N1) + c2·(x² − N2)); likewise MUX, KX, KY (c0, c1),
+//!                                   $ TRAIL, MRES, RL_MM (Rl += c0 + c1·x mm); no c0 for a base
+//!                                   $ fitted to the same logs
+//! WEAR_MUY, WEAR_KY, WEAR_CY, …     $ λ ×= exp(c·(E − N1) + c2·(E² − N2)), E = sliding energy [MJ];
+//! WEAR_MUY_S1, WEAR_MUX_S1          $ c2 on grip only; WEAR_RL_MM: Rl += c·(E − N1) mm;
+//! WEAR_NEUTRAL_MJ, WEAR_NEUTRAL_MJ2 $ N1, N2: 0 for a given model, the mean over the points for a
+//!                                   $ base fitted to the same logs
+//! BREAKIN_ENERGY_KJ, BREAKIN_THRESHOLD_KW, BREAKIN_MUY, BREAKIN_MUY_S1, …
+//!                                   $ λ ×= exp(c·(r − N1) + c2·(r₁₀ − N2)), r = exp(−E_sev/E₀),
+//!                                   $ r₁₀ = exp(−E_sev/10E₀) (slow stage: grip and stiffness),
+//!                                   $ E_sev above the threshold; BREAKIN_NEUTRAL(_SLOW): N1, N2
 //! SPEED_VREF_MPS, SPEED_MUY, …      $ λ ×= exp(c·(V − VREF)/VREF)
 //! SPECIMEN_MUY_T1, …                $ λ ×= exp(c) on the test's tyre 1 (2, …)
 //! TRANSIENT_SIGMA_Y0_M, TRANSIENT_ALPHA_HALF_DEG (…_X0_M, …_KAPPA_HALF)
@@ -38,7 +45,7 @@ pub fn extended_params(base: &TyreParams, effects: &[EffectParams], refs: &state
     sec.lines
         .push("$ Added by `tyrerig doctor` (see docs/doctor.md). MF-Tyre 6.1 readers ignore this section;".to_owned());
     sec.lines.push("$ the terms need state inputs (grip temperature, sliding energy, travelled distance).".to_owned());
-    sec.set("FORMAT_VERSION", TirValue::Number(2.0));
+    sec.set("FORMAT_VERSION", TirValue::Number(3.0));
     let names: Vec<&str> = effects.iter().map(|e| e.effect.name()).collect();
     sec.set("EFFECTS", TirValue::Text(names.join(",")));
     for e in effects {
