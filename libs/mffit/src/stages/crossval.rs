@@ -76,7 +76,12 @@ pub fn kfold(
             stage.margins().map(|set| Penalty { set, grid: &ctx.grid, weight: Penalty::weight_for(train.len()) });
         // Warm start from the all-data solution: a few iterations reach the training optimum.
         let settings = crate::fit::StepSettings { max_iterations: 25, ..ctx.settings };
-        fit_step_with(stage.name(), &mut p, keys, &train.points, channel, scale, &settings, penalty)?;
+        match rep.anchor_weight {
+            Some(w) => crate::stages::mz_joint::refit_fold(ctx, &mut p, keys, &train, w, &settings)?,
+            None => {
+                fit_step_with(stage.name(), &mut p, keys, &train.points, channel, scale, &settings, penalty)?;
+            }
+        }
         for pt in &test.points {
             let e = channel.eval(&p, &pt.input) - pt.measured;
             let e_fit = channel.eval(params, &pt.input) - pt.measured;

@@ -347,6 +347,11 @@ pub struct StageReport {
     /// what the prediction uncertainty of the stage's channel comes from (delta method).
     #[serde(skip)]
     pub covariance: Vec<f64>,
+    /// The weight of an earlier stage's points when this stage's keys were fitted together
+    /// with them (`mz_combined` refining `mz_pure`'s trail, [`mz_joint`]); cross-validation
+    /// refits the same way.
+    #[serde(skip)]
+    pub anchor_weight: Option<f64>,
 }
 
 impl StageReport {
@@ -375,6 +380,7 @@ impl StageReport {
             heldout: None,
             nonphysical: Vec::new(),
             covariance: Vec::new(),
+            anchor_weight: None,
         }
     }
 

@@ -260,5 +260,35 @@ pub fn refine(
     rep.serial_inflation = inflation;
     rep.covariance = covariance;
     rep.primary_keys = free;
+    rep.anchor_weight = Some(w);
+    Ok(())
+}
+
+/// Cross-validation's refit of a fold (`crossval::kfold`): the stage's `keys` refitted as the
+/// stage fitted them, on the fold's training sweeps `train` together with `mz_pure`'s points at
+/// the pure weight the stage chose. Refitting them on the combined sweeps alone would judge
+/// another procedure (the pure trail keys free of the pure data they were anchored to).
+pub fn refit_fold(
+    ctx: &Ctx,
+    params: &mut TyreParams,
+    keys: &[&'static str],
+    train: &StagePoints,
+    pure_weight: f64,
+    settings: &crate::fit::StepSettings,
+) -> Result<(), FitError> {
+    let pure = crate::stages::mz_pure::MzPure.select(ctx).unwrap_or_default();
+    let joint = Joint::of(train, &pure, pure_weight);
+    let penalty = Penalty { set: MarginSet::MzPure, grid: &ctx.grid, weight: Penalty::weight_for(joint.points.len()) };
+    fit_step_weighted(
+        "mz_combined",
+        params,
+        keys,
+        &joint.points,
+        Some(&joint.weights),
+        Channel::Mz,
+        joint.scale,
+        settings,
+        Some(penalty),
+    )?;
     Ok(())
 }
