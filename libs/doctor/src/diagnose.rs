@@ -772,7 +772,17 @@ fn revisit_hint(e: Effect) -> (&'static str, &'static str) {
 
 /// Runs the doctor on `ds` with the base model `base`.
 pub fn diagnose(ds: &Dataset, base: &TyreParams, cfg: &DoctorConfig) -> Result<Diagnosis, DoctorError> {
-    let ev = Evaluator::new(ds, base);
+    let mut ev = Evaluator::new(ds, base);
+    if cfg.form_correction {
+        // A base fitted to these logs holds their speed: the speed effect is neutral at the
+        // speed most points ran at. At LONGVL instead, a few tenths of a m/s away, the speed
+        // terms were a free grip and stiffness level for the whole log (benchmark: `speed`
+        // named after wear on the brush road tyre for a DSTWOWHC gain at 16.6 m/s).
+        let median_mps = percentile(ds.points.iter().map(|&i| ds.series.v_mps[i]).collect(), 0.5);
+        if median_mps > 0.1 {
+            ev.v_ref_mps = median_mps;
+        }
+    }
     let all: Vec<usize> = (0..ds.len()).collect();
     let mut meas = measured(&ev);
     // Channels not diagnosed take no part: their measured values are treated as missing.

@@ -305,7 +305,8 @@ pub struct Evaluator<'a> {
     pub base: &'a TyreParams,
     /// Reference temperature of the thermal extension (median grip temperature) [°C].
     pub t_ref_c: f64,
-    /// Reference speed of the speed extension (LONGVL) [m/s].
+    /// Reference speed of the speed extension: LONGVL for a given model, the points' median
+    /// speed for a base fitted to them [m/s].
     pub v_ref_mps: f64,
     /// Severe sliding energy per [`state::BREAK_IN_THRESHOLDS_W`] [J].
     severe: Vec<Vec<f64>>,
