@@ -200,6 +200,10 @@ pub struct Diagnosis {
     pub stop_reason: String,
     /// State effects these logs cannot tell from the operating point, each with what to do.
     pub not_identifiable: Vec<String>,
+    /// State effects named in the forward search and dropped afterwards, each with why: with
+    /// the state effects named after them in the model they were no longer significant (they
+    /// had stood in for one of those).
+    pub dropped: Vec<String>,
     /// References of the state variables (thermal reference and range, speed reference).
     pub references: state::References,
     /// Per log, the decay time constant of the laser flash fitted out of the quiet tread
@@ -754,6 +758,239 @@ impl Ctx<'_> {
     }
 }
 
+/// A model under consideration: its effects (fitted on all sweeps), its predictions on all
+/// sweeps and its own held-out predictions (without any form-error correction).
+#[derive(Clone)]
+struct Model {
+    present: Vec<EffectParams>,
+    cur_fit: Vec<[f64; 4]>,
+    cur_ho: Vec<[f64; 4]>,
+}
+
+/// The search's state: the model so far, what is named (in order, one round each), the plots,
+/// and the model as it was before the first state effect with the count named then (the
+/// backward check returns to it when no state effect stands on its own).
+struct Search {
+    model: Model,
+    named: Vec<NamedEffect>,
+    plot: PlotData,
+    before_state: Option<(usize, Model)>,
+}
+
+impl Search {
+    fn accept(&mut self, acc: Accepted) {
+        if acc.named.family == Family::State && self.before_state.is_none() {
+            self.before_state = Some((self.named.len(), self.model.clone()));
+        }
+        let [before_fit_c, after_fit_c, before_ho_c, after_ho_c] = acc.plots;
+        self.plot.before.push(before_fit_c);
+        self.plot.after.push(after_fit_c);
+        self.plot.before_heldout.push(before_ho_c);
+        self.plot.after_heldout.push(after_ho_c);
+        self.plot.region.push(acc.region);
+        self.named.push(acc.named);
+        self.model = Model { present: acc.fit.model, cur_fit: acc.fit.pred_fit, cur_ho: acc.pred_ho_model };
+    }
+
+    /// Removes the `i`-th named effect (the model is the caller's to set).
+    fn remove(&mut self, i: usize) {
+        self.named.remove(i);
+        let p = &mut self.plot;
+        for v in [&mut p.before, &mut p.after, &mut p.before_heldout, &mut p.after_heldout] {
+            if i < v.len() {
+                v.remove(i);
+            }
+        }
+        if i < p.region.len() {
+            p.region.remove(i);
+        }
+    }
+}
+
+impl Ctx<'_> {
+    /// The form error of a model with predictions `cur_fit` (all sweeps) and `cur_ho` (held-out).
+    fn form_error(&self, cur_fit: &[[f64; 4]], cur_ho: &[[f64; 4]], bw: &Bandwidths) -> FormError {
+        let per_fold = form::cross_fitted(self.ds, &residual(&self.meas, cur_ho), &self.fl, bw);
+        let all = form::leave_one_sweep_out(self.ds, &residual(&self.meas, cur_fit), bw);
+        let before_heldout: Vec<[f64; 4]> = (0..self.ds.len())
+            .map(|k| std::array::from_fn(|ch| cur_ho[k][ch] + per_fold[self.fold_of[k]][k][ch]))
+            .collect();
+        FormError { per_fold, all, before_heldout }
+    }
+
+    /// The model without the state effect `drop`: the other state effects refitted jointly
+    /// (their held-out predictions by refitting per fold), the non-state effects kept at their
+    /// fit. `fe` is the full model's form error: what no state effect explains, so the others
+    /// may take over whatever `drop` explained. `None` when no other state effect is left.
+    fn without(&self, full: &Model, drop: Effect, fe: Option<&FormError>) -> Option<Model> {
+        let others: Vec<EffectParams> = full.present.iter().filter(|e| e.effect != drop).cloned().collect();
+        let last = others.iter().rev().find(|e| state::is_state_scaling(e.effect))?.effect;
+        let rest: Vec<EffectParams> = others.into_iter().filter(|e| e.effect != last).collect();
+        let lin = linfit::linearize(&self.ev, &rest);
+        let round = Round { present: &rest, cur_ho: &full.cur_ho, form_error: fe, lin: &lin };
+        let (fit, _) = self.fit_state(&round, last, fe)?;
+        let cur_ho = match fe {
+            Some(f) => (0..self.ds.len())
+                .map(|k| std::array::from_fn(|c| fit.pred_ho[k][c] - f.per_fold[self.fold_of[k]][k][c]))
+                .collect(),
+            None => fit.pred_ho,
+        };
+        Some(Model { present: fit.model, cur_fit: fit.pred_fit, cur_ho })
+    }
+
+    /// Masking: two state effects hidden together can each fail the bootstrap alone — the
+    /// other's part, unexplained, makes a single effect's gain inconsistent over sweeps
+    /// (benchmark: brush road tyre, thermal + wear, nothing named while wear alone was). When no
+    /// candidate of a round is accepted, the two state candidates with the most evidence are
+    /// each tried as a first step: added (it must still cut its own region and harm no
+    /// channel), the remaining state candidates are scored against it, and a significant one
+    /// that passes the judgement is added with it (its Bonferroni share counts both first
+    /// steps). The backward check then asks the first to be significant given the second.
+    fn masked_pair(
+        &self,
+        r: &Round<'_>,
+        scores: &[CandidateScore],
+        fits: &[Option<CandidateFit>],
+        cur_fit: &[[f64; 4]],
+        named: &[Effect],
+        bw: &Bandwidths,
+    ) -> Option<(Accepted, Accepted, Vec<CandidateScore>)> {
+        let mut firsts: Vec<usize> = (0..scores.len())
+            .filter(|&i| {
+                let s = &scores[i];
+                s.testable && s.family == Family::State && s.evidence >= self.cfg.min_evidence && fits[i].is_some()
+            })
+            .collect();
+        firsts.sort_by(|&a, &b| scores[b].evidence.total_cmp(&scores[a].evidence));
+        firsts.truncate(2);
+        let n_firsts = firsts.len();
+        for i in firsts {
+            let Some(fit) = fits[i].clone() else { continue };
+            let Ok(first) = self.judge(r, &scores[i], fit, cur_fit, None) else { continue };
+            let present = first.fit.model.clone();
+            let fe = self.cfg.form_correction.then(|| self.form_error(&first.fit.pred_fit, &first.pred_ho_model, bw));
+            let lin = linfit::linearize(&self.ev, &present);
+            let r2 = Round { present: &present, cur_ho: &first.pred_ho_model, form_error: fe.as_ref(), lin: &lin };
+            let todo: Vec<Effect> = self
+                .cfg
+                .candidates
+                .iter()
+                .copied()
+                .filter(|e| e.family() == Family::State && *e != scores[i].effect && !named.contains(e))
+                .collect();
+            let m_tests = n_firsts * todo.iter().filter(|e| untestable_reason(**e, self.ds).is_none()).count();
+            let (mut s2, f2): (Vec<CandidateScore>, Vec<Option<CandidateFit>>) =
+                self.score_all(&r2, &todo, m_tests).into_iter().unzip();
+            let mut order: Vec<usize> = (0..s2.len()).filter(|&j| s2[j].significant).collect();
+            order.sort_by(|&a, &b| s2[b].evidence.total_cmp(&s2[a].evidence));
+            for j in order {
+                let Some(fit2) = f2[j].clone() else { continue };
+                match self.judge(&r2, &s2[j], fit2, &first.fit.pred_fit, None) {
+                    Ok(second) => return Some((first, second, s2)),
+                    Err(why) => {
+                        s2[j].significant = false;
+                        s2[j].reason = why;
+                    }
+                }
+            }
+        }
+        None
+    }
+
+    /// Backward check of the forward search: a state effect named early can have stood in for
+    /// one named after it (thermal drift, wear and break-in all grow through a test, and the
+    /// best single form takes the first round). Each named state effect is scored again as the
+    /// last addition to a model holding all the others, refitted without it; while one is not
+    /// significant there, the weakest is dropped.
+    fn drop_stand_ins(&self, search: &mut Search, rounds: &[Vec<CandidateScore>], bw: &Bandwidths) -> Vec<String> {
+        let mut dropped = Vec::new();
+        loop {
+            let state_named: Vec<Effect> =
+                search.named.iter().filter(|n| n.family == Family::State).map(|n| n.effect).collect();
+            if state_named.len() < 2 {
+                self.alone_or_nothing(search, rounds, &mut dropped);
+                return dropped;
+            }
+            let model = &search.model;
+            let full_fe = self.cfg.form_correction.then(|| self.form_error(&model.cur_fit, &model.cur_ho, bw));
+            let mut weakest: Option<(CandidateScore, Model)> = None;
+            for &e in &state_named {
+                let Some(rest) = self.without(model, e, full_fe.as_ref()) else { continue };
+                let fe = self.cfg.form_correction.then(|| self.form_error(&rest.cur_fit, &rest.cur_ho, bw));
+                let lin = linfit::linearize(&self.ev, &rest.present);
+                let round = Round { present: &rest.present, cur_ho: &rest.cur_ho, form_error: fe.as_ref(), lin: &lin };
+                let m_tests = self
+                    .cfg
+                    .candidates
+                    .iter()
+                    .filter(|c| **c == e || !search.named.iter().any(|n| n.effect == **c))
+                    .filter(|c| untestable_reason(**c, self.ds).is_none())
+                    .count();
+                let (score, _) = self.score(&round, e, fe.is_some(), m_tests);
+                if !score.significant && weakest.as_ref().is_none_or(|(w, _)| score.evidence < w.evidence) {
+                    weakest = Some((score, rest));
+                }
+            }
+            let Some((score, rest)) = weakest else { return dropped };
+            let others: Vec<&str> = state_named.iter().filter(|e| **e != score.effect).map(|e| e.name()).collect();
+            dropped.push(format!(
+                "{} dropped: with {} in the model it explains {:.1} % of the held-out χ² (bootstrap p = {:.3}, {}/{} \
+                 folds improved): it had stood in for what they explain",
+                score.effect.name(),
+                others.join(" and "),
+                100.0 * score.evidence,
+                score.p_value,
+                score.folds_improved,
+                score.folds,
+            ));
+            if let Some(i) = search.named.iter().position(|n| n.effect == score.effect) {
+                search.remove(i);
+            }
+            search.model = rest;
+        }
+    }
+
+    /// After a drop, the one state effect left must stand on its own: significant in the round
+    /// that named the first state effect (scored there against a model with no state effect).
+    /// Named only as the partner of one dropped since, it is not — and the model returns to
+    /// where it was before the first state effect.
+    fn alone_or_nothing(&self, search: &mut Search, rounds: &[Vec<CandidateScore>], dropped: &mut Vec<String>) {
+        if dropped.is_empty() {
+            return;
+        }
+        let Some((k0, before)) = search.before_state.clone() else { return };
+        let Some(last) = search.named.iter().find(|n| n.family == Family::State).map(|n| n.effect) else { return };
+        // Significant by the naming rule's statistics: the judgement of that round (its region
+        // cut, harm to a channel) may have turned it down in favour of a partner.
+        let Some(round) = rounds.get(k0) else { return };
+        let m_tests = round.iter().filter(|s| s.testable).count().max(1) as f64;
+        let alone = round.iter().find(|s| s.effect == last);
+        let stands = |s: &CandidateScore| {
+            s.evidence >= self.cfg.min_evidence
+                && s.folds_improved + 1 >= s.folds
+                && s.p_value <= self.cfg.false_naming_rate / m_tests
+        };
+        if alone.is_none_or(stands) {
+            return;
+        }
+        let p = alone.map_or(1.0, |s| s.p_value);
+        for n in search.named.drain(k0..) {
+            dropped.push(format!(
+                "{} dropped: alone it was not significant (bootstrap p = {p:.3}), and the state effect it was named with is gone",
+                n.effect.name()
+            ));
+        }
+        let keep = |v: &mut Vec<Vec<[f64; 4]>>| v.truncate(k0);
+        let pl = &mut search.plot;
+        keep(&mut pl.before);
+        keep(&mut pl.after);
+        keep(&mut pl.before_heldout);
+        keep(&mut pl.after_heldout);
+        pl.region.truncate(k0);
+        search.model = before;
+    }
+}
+
 /// What a state effect needs to be told from the operating point.
 fn revisit_hint(e: Effect) -> (&'static str, &'static str) {
     match e {
@@ -824,17 +1061,19 @@ pub fn diagnose(ds: &Dataset, base: &TyreParams, cfg: &DoctorConfig) -> Result<D
     let regions = find_regions(ds, &meas, &base_pred, &sigma);
     let ctx = Ctx { ds, base, cfg, ev, meas, sigma, fl, fold_of, all, n_res, coverage };
 
-    let mut present: Vec<EffectParams> = Vec::new();
-    let mut cur_fit = base_pred.clone();
-    let mut cur_ho = base_pred.clone();
-    let mut named: Vec<NamedEffect> = Vec::new();
+    let mut search = Search {
+        model: Model { present: Vec::new(), cur_fit: base_pred.clone(), cur_ho: base_pred.clone() },
+        named: Vec::new(),
+        plot: PlotData { meas: ctx.meas.clone(), base: base_pred.clone(), ..Default::default() },
+        before_state: None,
+    };
     let mut rounds = Vec::new();
-    let mut plot = PlotData { meas: ctx.meas.clone(), base: base_pred.clone(), ..Default::default() };
     let mut stop_reason = String::new();
     let mut not_identifiable = Vec::new();
 
-    while named.len() < cfg.max_effects {
-        let chi_before: f64 = total(chi2(&ctx.meas, &cur_ho, &ctx.sigma, &ctx.all));
+    while search.named.len() < cfg.max_effects {
+        let Model { present, cur_fit, cur_ho } = &search.model;
+        let chi_before: f64 = total(chi2(&ctx.meas, cur_ho, &ctx.sigma, &ctx.all));
         let excess = chi_before / n_res - 1.0;
         if excess < cfg.min_excess {
             stop_reason = format!(
@@ -846,18 +1085,11 @@ pub fn diagnose(ds: &Dataset, base: &TyreParams, cfg: &DoctorConfig) -> Result<D
             break;
         }
         // The present model's form error (state candidates are scored against it).
-        let form_error = cfg.form_correction.then(|| {
-            let per_fold = form::cross_fitted(ds, &residual(&ctx.meas, &cur_ho), &ctx.fl, &bandwidths);
-            let all_corr = form::leave_one_sweep_out(ds, &residual(&ctx.meas, &cur_fit), &bandwidths);
-            let before_heldout: Vec<[f64; 4]> = (0..ds.len())
-                .map(|k| std::array::from_fn(|ch| cur_ho[k][ch] + per_fold[ctx.fold_of[k]][k][ch]))
-                .collect();
-            FormError { per_fold, all: all_corr, before_heldout }
-        });
-        let lin = linfit::linearize(&ctx.ev, &present);
-        let round = Round { present: &present, cur_ho: &cur_ho, form_error: form_error.as_ref(), lin: &lin };
-        let todo: Vec<Effect> =
-            cfg.candidates.iter().copied().filter(|e| !named.iter().any(|n| n.effect == *e)).collect();
+        let form_error = cfg.form_correction.then(|| ctx.form_error(cur_fit, cur_ho, &bandwidths));
+        let lin = linfit::linearize(&ctx.ev, present);
+        let round = Round { present, cur_ho, form_error: form_error.as_ref(), lin: &lin };
+        let done: Vec<Effect> = search.named.iter().map(|n| n.effect).collect();
+        let todo: Vec<Effect> = cfg.candidates.iter().copied().filter(|e| !done.contains(e)).collect();
         let m_tests = todo.iter().filter(|e| untestable_reason(**e, ds).is_none()).count();
         let (mut scores, fits): (Vec<CandidateScore>, Vec<Option<CandidateFit>>) =
             ctx.score_all(&round, &todo, m_tests).into_iter().unzip();
@@ -873,7 +1105,7 @@ pub fn diagnose(ds: &Dataset, base: &TyreParams, cfg: &DoctorConfig) -> Result<D
             let Some(fit) = fits[bi].clone() else { continue };
             let runner_up =
                 order.iter().enumerate().find(|(p, _)| *p != pos).map(|(_, &i)| (scores[i].effect, scores[i].evidence));
-            match ctx.judge(&round, &scores[bi], fit, &cur_fit, runner_up) {
+            match ctx.judge(&round, &scores[bi], fit, cur_fit, runner_up) {
                 Ok(a) => {
                     accepted = Some(a);
                     break;
@@ -884,29 +1116,33 @@ pub fn diagnose(ds: &Dataset, base: &TyreParams, cfg: &DoctorConfig) -> Result<D
                 }
             }
         }
-        let Some(acc) = accepted else {
-            if form_error.is_some() {
-                not_identifiable = ctx.not_identifiable(&round, &scores, m_tests);
-            }
-            rounds.push(scores.clone());
-            stop_reason = no_candidate_reason(&scores, &order, cfg);
-            break;
-        };
+        if let Some(acc) = accepted {
+            rounds.push(scores);
+            search.accept(acc);
+            continue;
+        }
+        let pair = (done.len() + 2 <= cfg.max_effects)
+            .then(|| ctx.masked_pair(&round, &scores, &fits, cur_fit, &done, &bandwidths))
+            .flatten();
+        if let Some((first, second, scores2)) = pair {
+            rounds.push(scores);
+            rounds.push(scores2);
+            search.accept(first);
+            search.accept(second);
+            continue;
+        }
+        if form_error.is_some() {
+            not_identifiable = ctx.not_identifiable(&round, &scores, m_tests);
+        }
+        stop_reason = no_candidate_reason(&scores, &order, cfg);
         rounds.push(scores);
-        let [before_fit_c, after_fit_c, before_ho_c, after_ho_c] = acc.plots;
-        plot.before.push(before_fit_c);
-        plot.after.push(after_fit_c);
-        plot.before_heldout.push(before_ho_c);
-        plot.after_heldout.push(after_ho_c);
-        plot.region.push(acc.region);
-        named.push(acc.named);
-        present = acc.fit.model;
-        cur_fit = acc.fit.pred_fit;
-        cur_ho = acc.pred_ho_model;
+        break;
     }
     if stop_reason.is_empty() {
         stop_reason = format!("stopped at the limit of {} effects", cfg.max_effects);
     }
+    let dropped = ctx.drop_stand_ins(&mut search, &rounds, &bandwidths);
+    let Search { model: Model { present, cur_fit, cur_ho }, mut named, plot, .. } = search;
     // Keep each named effect's parameters from the final joint fit.
     for ne in &mut named {
         if let Some(p) = present.iter().find(|p| p.effect == ne.effect) {
@@ -930,6 +1166,7 @@ pub fn diagnose(ds: &Dataset, base: &TyreParams, cfg: &DoctorConfig) -> Result<D
         sweeps: ds.sweeps.len(),
         stop_reason,
         not_identifiable,
+        dropped,
         references: ctx.ev.references(),
         flash_decay_s: ds.flash_decay_s.clone(),
         not_diagnosed,

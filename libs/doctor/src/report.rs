@@ -90,6 +90,7 @@ pub fn to_json(
         "named_effects": dx.state_effects().map(|n| n.effect.name()).collect::<Vec<_>>(),
         "form_errors": dx.form_errors().map(|n| n.effect.name()).collect::<Vec<_>>(),
         "not_identifiable": dx.not_identifiable,
+        "dropped": dx.dropped,
         "effects": dx.named.iter().map(|n| json!({
             "effect": n.effect.name(),
             "evidence": n.evidence,
@@ -226,10 +227,10 @@ pub fn markdown(
         }
         let _ = writeln!(m);
     }
-    for ni in &dx.not_identifiable {
+    for ni in dx.not_identifiable.iter().chain(&dx.dropped) {
         let _ = writeln!(m, "- {ni}.");
     }
-    if !dx.not_identifiable.is_empty() {
+    if !dx.not_identifiable.is_empty() || !dx.dropped.is_empty() {
         let _ = writeln!(m);
     }
     let _ = writeln!(m, "Search stopped: {}\n", dx.stop_reason);

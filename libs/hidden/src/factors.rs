@@ -62,15 +62,17 @@ impl<'a> TrueTyre<'a> {
         Self { tyre }
     }
 
-    /// FX, FYW, MZW [N, N, N·m] at `x` with the effect's factors applied (ISO-W, use mode 111).
-    /// An MF tyre takes every factor; the brush tyre has one grip and one stiffness factor
-    /// (the means of the longitudinal and lateral ones) and no shape or trail factor.
-    pub fn forces(&self, f: &Factors, x: &MfInput) -> [f64; 3] {
+    /// FX, FYW, MZW [N, N, N·m] and the loaded radius [m] at `x` with the effect's factors
+    /// applied (ISO-W, use mode 111). An MF tyre takes every factor; the brush tyre has one grip
+    /// and one stiffness factor (the means of the longitudinal and lateral ones) and no shape or
+    /// trail factor. The radius is the tyre's own: MF-Tyre 6.1's loaded radius follows FX and
+    /// FY, so a grip change moves it — the rig measures that, and so must a hidden effect.
+    pub fn forces(&self, f: &Factors, x: &MfInput) -> [f64; 4] {
         match self.tyre {
             VirtualTyre::Mf(p) => {
                 let s = scaled(&p.scaling, f);
                 let o = mftyre::evaluate_scaled(p, &s, UseMode::M111, x);
-                [o.fx_n, o.fy_n, o.mz_nm]
+                [o.fx_n, o.fy_n, o.mz_nm, o.rl_m]
             }
             VirtualTyre::Brush(b) => {
                 let o = b.evaluate(&BrushInput {
@@ -83,7 +85,7 @@ impl<'a> TrueTyre<'a> {
                     grip_factor: 0.5 * (f.mux + f.muy),
                     stiffness_factor: 0.5 * (f.kx + f.ky),
                 });
-                [o.fx_n, o.fy_n, o.mz_nm]
+                [o.fx_n, o.fy_n, o.mz_nm, o.rl_m]
             }
         }
     }
@@ -100,4 +102,27 @@ fn scaled(base: &ScalingFactors, f: &Factors) -> ScalingFactors {
     s.ltr *= f.trail;
     s.lres *= f.trail;
     s
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use mftyre::TyreParams;
+    use std::path::Path;
+
+    /// MF-Tyre 6.1's loaded radius follows the forces: a hidden grip loss at a large slip angle
+    /// must move the radius the rig reports, or the injected log is one no tyre could produce.
+    #[test]
+    fn a_grip_change_moves_the_mf_tyres_loaded_radius() {
+        let tir =
+            Path::new(env!("CARGO_MANIFEST_DIR")).join("../../launch-config/tyres/MagicFormula61_Paramerters.tir");
+        let tyre = VirtualTyre::from(TyreParams::read_tir(&tir).expect("the shipped MF tyre reads"));
+        let truth = TrueTyre::new(&tyre);
+        let x = MfInput { fz_n: 4000.0, alpha_rad: 8f64.to_radians(), vx_mps: 16.7, ..MfInput::default() };
+        let less_grip = Factors { muy: 0.8, ..Factors::NEUTRAL };
+        let (with, without) = (truth.forces(&less_grip, &x), truth.forces(&Factors::NEUTRAL, &x));
+        assert!(with[1].abs() < 0.9 * without[1].abs(), "FYW {} vs {}", with[1], without[1]);
+        let drl_mm = (with[3] - without[3]) * 1e3;
+        assert!(drl_mm.abs() > 0.01, "loaded radius moved by {drl_mm} mm");
+    }
 }

@@ -101,7 +101,8 @@ fn read(path: &Path) -> Result<Vec<u8>, InjectError> {
 }
 
 /// The change `factors` make at every sample: the true tyre with them minus the true tyre
-/// without, at the measured inputs (forces only where they may change), and the radius change.
+/// without, at the measured inputs (forces only where they may change), and the radius change:
+/// the effect's own plus what the tyre's loaded radius does with the changed forces.
 fn deltas(truth: &TrueTyre<'_>, s: &LogSeries, factors: &[Factors]) -> Deltas {
     let one = |k: usize| -> [f64; 4] {
         let f = &factors[k];
@@ -111,7 +112,8 @@ fn deltas(truth: &TrueTyre<'_>, s: &LogSeries, factors: &[Factors]) -> Deltas {
         }
         let with = truth.forces(f, &s.input[k]);
         let without = truth.forces(&Factors::NEUTRAL, &s.input[k]);
-        let d = [with[0] - without[0], with[1] - without[1], with[2] - without[2]];
+        let d: [f64; 4] = std::array::from_fn(|i| with[i] - without[i]);
+        let radius = if s.radius_ok[k] { radius + d[3] } else { 0.0 };
         // A model evaluation that fails (NaN at some odd input) changes nothing.
         if d.iter().all(|v| v.is_finite()) { [d[0], d[1], d[2], radius] } else { [0.0, 0.0, 0.0, radius] }
     };

@@ -161,7 +161,7 @@ pub fn run(args: DoctorArgs) -> Result<()> {
             n.rms_after
         );
     }
-    for ni in &dx.not_identifiable {
+    for ni in dx.not_identifiable.iter().chain(&dx.dropped) {
         println!("{ni}");
     }
     println!("report: {}", w.markdown.display());
