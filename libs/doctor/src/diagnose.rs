@@ -24,7 +24,8 @@ pub struct DoctorConfig {
     /// Smallest excess of the present model's held-out χ² over the noise floor (χ²/N − 1) for
     /// anything to be looked for.
     pub min_excess: f64,
-    /// Most effects named.
+    /// Most effects named of each family (state effects, form errors): a real tyre's form
+    /// errors (camber, offset) must not use up the places of a state effect hidden in its runs.
     pub max_effects: usize,
     /// Candidates tested.
     pub candidates: Vec<Effect>,
@@ -258,7 +259,8 @@ struct FormError {
     per_fold: Vec<form::FoldCorrection>,
     /// Every point's correction from all other sweeps (fits on all sweeps).
     all: form::FoldCorrection,
-    /// Held-out predictions of the present model plus the correction.
+    /// Held-out predictions of the present model scored as a state candidate's are (its state
+    /// effects refitted per fold to the corrected targets), plus the correction.
     before_heldout: Vec<[f64; 4]>,
 }
 
@@ -360,25 +362,37 @@ struct Ctx<'a> {
     coverage: Coverage,
 }
 
-/// The present model of a round and what scoring against it needs.
-struct Round<'r> {
+/// The present model of a round and what scoring against it needs. A candidate's gain is
+/// measured against the present model evaluated on held-out sweeps exactly as the candidate's
+/// fit is (only the candidate differs): a state candidate refits every state effect per fold,
+/// so its baseline does too ([`Round::cur_ho`]); a nonlinear candidate holds the present model
+/// at its fit on all sweeps, so its baseline is that fit ([`Round::cur_fit`]). Against the
+/// state effects' per-fold refit, a refit held next to their all-sweeps fit gained what those
+/// had seen of the held-out fold: after a strong thermal effect every refit candidate
+/// "explained" 60 % of the rest (benchmark, MF tyre, TTC plan), and load, pressure and camber
+/// were named after state effects on clean tyres.
+struct Round {
     /// Everything added so far, fitted on all sweeps.
-    present: &'r [EffectParams],
-    /// Held-out predictions of the present model.
-    cur_ho: &'r [[f64; 4]],
+    present: Vec<EffectParams>,
+    /// Predictions of the present model on all sweeps.
+    cur_fit: Vec<[f64; 4]>,
+    /// Held-out predictions of the present model: its state effects refitted per fold, the
+    /// rest at their fit on all sweeps.
+    cur_ho: Vec<[f64; 4]>,
     /// Its form error, where state candidates are scored against it.
-    form_error: Option<&'r FormError>,
+    form_error: Option<FormError>,
     /// The present model linearised in its scaling factors.
-    lin: &'r linfit::Linearization,
+    lin: linfit::Linearization,
 }
 
-impl Round<'_> {
-    fn state_effects(&self) -> Vec<EffectParams> {
-        self.present.iter().filter(|e| state::is_state_scaling(e.effect)).cloned().collect()
-    }
-
-    fn nonstate_effects(&self) -> Vec<EffectParams> {
-        self.present.iter().filter(|e| !state::is_state_scaling(e.effect)).cloned().collect()
+impl Round {
+    /// The held-out baseline a candidate's held-out predictions are compared with.
+    fn baseline(&self, eff: Effect, corrected: bool) -> &[[f64; 4]] {
+        match self.form_error.as_ref().filter(|_| corrected) {
+            Some(f) => &f.before_heldout,
+            None if state::is_state_scaling(eff) => &self.cur_ho,
+            None => &self.cur_fit,
+        }
     }
 }
 
@@ -408,14 +422,17 @@ impl Ctx<'_> {
     }
 
     /// Scores a candidate against the round's model (`corrected`: against model + form error).
-    fn score(&self, r: &Round<'_>, eff: Effect, corrected: bool, m_tests: usize) -> Scored {
+    fn score(&self, r: &Round, eff: Effect, corrected: bool, m_tests: usize) -> Scored {
         if let Some(reason) = untestable_reason(eff, self.ds) {
             return self.untestable(eff, 0.0, reason);
         }
-        let fe = r.form_error.filter(|_| corrected);
-        let before_ho: &[[f64; 4]] = fe.map_or(r.cur_ho, |f| &f.before_heldout);
-        let fitted =
-            if state::is_state_scaling(eff) { self.fit_state(r, eff, fe) } else { self.fit_nonlinear(r, eff, fe) };
+        let fe = r.form_error.as_ref().filter(|_| corrected);
+        let before_ho = r.baseline(eff, corrected);
+        let fitted = if state::is_state_scaling(eff) {
+            self.fit_state(&r.present, &r.lin, eff, fe)
+        } else {
+            self.fit_nonlinear(r, eff, fe)
+        };
         let Some((fit, k)) = fitted else {
             return self.untestable(eff, 0.0, "no coefficient the data determine".to_owned());
         };
@@ -492,12 +509,19 @@ impl Ctx<'_> {
     /// A whole-tyre state candidate: its discrete choice by the all-sweeps fit, its terms by
     /// linear least squares through the sensitivities (one Gauss–Newton step), held-out
     /// predictions by refitting every coefficient of the state effects per fold.
-    fn fit_state(&self, r: &Round<'_>, eff: Effect, fe: Option<&FormError>) -> Option<(CandidateFit, usize)> {
+    fn fit_state(
+        &self,
+        model: &[EffectParams],
+        lin: &linfit::Linearization,
+        eff: Effect,
+        fe: Option<&FormError>,
+    ) -> Option<(CandidateFit, usize)> {
         let terms = state::terms(eff, self.coverage);
         if terms.is_empty() {
             return None;
         }
-        let present = r.state_effects();
+        let (present, fixed): (Vec<EffectParams>, Vec<EffectParams>) =
+            model.iter().cloned().partition(|e| state::is_state_scaling(e.effect));
         let pterms = present_terms(&present);
         let target_all = |k: usize| -> [f64; 4] {
             match fe {
@@ -511,18 +535,17 @@ impl Ctx<'_> {
             .into_iter()
             .map(|c| {
                 let d = linfit::with_candidate(&self.ev, &present, &pterms, eff, c, terms.clone());
-                (c, linfit::chi2_after_solve(&self.ev, &d, r.lin, &target_all, &self.sigma))
+                (c, linfit::chi2_after_solve(&self.ev, &d, lin, &target_all, &self.sigma))
             })
             .min_by(|a, b| a.1.total_cmp(&b.1))
             .map(|(c, _)| c)?;
         let design = linfit::with_candidate(&self.ev, &present, &pterms, eff, choice, terms);
         let slot = present.len();
-        let k = linfit::determined_columns(&self.ev, &design, r.lin, &self.sigma, slot) + Choice::n_knobs(eff);
+        let k = linfit::determined_columns(&self.ev, &design, lin, &self.sigma, slot) + Choice::n_knobs(eff);
         if k == Choice::n_knobs(eff) {
             return None;
         }
-        let fixed = r.nonstate_effects();
-        let fitted = linfit::fit_all(&self.ev, design, r.lin, &fixed, &target_all, &self.sigma);
+        let fitted = linfit::fit_all(&self.ev, design, lin, &fixed, &target_all, &self.sigma);
         let (ev, sigma) = (&self.ev, &self.sigma);
         let target_fold = |fi: usize, k: usize| -> [f64; 4] {
             match fe {
@@ -545,14 +568,14 @@ impl Ctx<'_> {
     /// A nonlinear candidate (transient, the refits): Levenberg–Marquardt per fold, everything
     /// already added held at its fit on all sweeps (refitting them too would multiply the cost
     /// of every later round; the state effects are refitted per fold in their own rounds).
-    fn fit_nonlinear(&self, r: &Round<'_>, eff: Effect, fe: Option<&FormError>) -> Option<(CandidateFit, usize)> {
+    fn fit_nonlinear(&self, r: &Round, eff: Effect, fe: Option<&FormError>) -> Option<(CandidateFit, usize)> {
         let new = FitSpec { effect: eff, params: param_specs(eff, self.ds, self.base) };
         let k = new.params.len();
         if k == 0 {
             return None;
         }
         let specs = [new];
-        let fixed = r.present.to_vec();
+        let fixed = r.present.clone();
         let (ev, meas, sigma, opt) = (&self.ev, &self.meas, self.sigma, self.cfg.fit);
         let pred_ho = match fe {
             Some(f) => cross_validate_corrected(ev, &specs, &fixed, &self.fl, meas, sigma, opt, &f.per_fold),
@@ -577,12 +600,15 @@ impl Ctx<'_> {
 /// a held-out DSTWOWHC RMS growing 0.029 → 0.042 mm.
 const HARM_RESOLUTION: [f64; 4] = [2.0, 2.0, 0.2, 0.05e-3];
 
+/// Fewest points at which a named effect must move its channel's prediction beyond noise: an
+/// effect with no region has nothing to show (benchmark: `transient` named on a TTC plan with
+/// an empty region, its held-out RMS there 0 → 0).
+const MIN_REGION_POINTS: usize = 10;
+
 /// A candidate accepted into the model.
 struct Accepted {
     named: NamedEffect,
     fit: CandidateFit,
-    /// The model's own held-out predictions (without the correction).
-    pred_ho_model: Vec<[f64; 4]>,
     region: Vec<usize>,
     /// Before/after on the fit and held-out, as plotted (with the correction where scored so).
     plots: [Vec<[f64; 4]>; 4],
@@ -593,17 +619,18 @@ impl Ctx<'_> {
     /// (else it soaks up something else) and make no channel worse on held-out sweeps.
     fn judge(
         &self,
-        r: &Round<'_>,
+        r: &Round,
         score: &CandidateScore,
         fit: CandidateFit,
-        cur_fit: &[[f64; 4]],
         runner_up: Option<(Effect, f64)>,
     ) -> Result<Accepted, String> {
-        let fe = r.form_error.filter(|_| score.form_corrected);
+        let fe = r.form_error.as_ref().filter(|_| score.form_corrected);
         let (meas, sigma) = (&self.meas, &self.sigma);
-        let (before_fit_c, after_fit_c, before_ho_c) = match fe {
-            Some(f) => (add(cur_fit, &f.all), add(&fit.pred_fit, &f.all), f.before_heldout.clone()),
-            None => (cur_fit.to_vec(), fit.pred_fit.clone(), r.cur_ho.to_vec()),
+        let cur_fit = &r.cur_fit;
+        let before_ho_c = r.baseline(score.effect, score.form_corrected).to_vec();
+        let (before_fit_c, after_fit_c) = match fe {
+            Some(f) => (add(cur_fit, &f.all), add(&fit.pred_fit, &f.all)),
+            None => (cur_fit.to_vec(), fit.pred_fit.clone()),
         };
         let ch = (0..4)
             .max_by(|&a, &b| score.delta_chi2_by_channel[a].total_cmp(&score.delta_chi2_by_channel[b]))
@@ -624,6 +651,13 @@ impl Ctx<'_> {
                 break;
             }
             thr /= 2.0;
+        }
+        if region.len() < MIN_REGION_POINTS {
+            return Err(format!(
+                "rejected: it moves the {} prediction by more than {thr} σ at {} point(s) only (needs {MIN_REGION_POINTS})",
+                CHANNELS[ch],
+                region.len()
+            ));
         }
         let before_ho = rms_of(meas, &before_ho_c, ch, &region);
         let after_ho = rms_of(meas, &fit.pred_ho, ch, &region);
@@ -689,20 +723,12 @@ impl Ctx<'_> {
             form_corrected: fe.is_some(),
             params,
         };
-        // The model's own held-out predictions go on to the next round (the correction is not
-        // part of the model).
-        let pred_ho_model: Vec<[f64; 4]> = match fe {
-            Some(f) => (0..self.ds.len())
-                .map(|k| std::array::from_fn(|c| fit.pred_ho[k][c] - f.per_fold[self.fold_of[k]][k][c]))
-                .collect(),
-            None => fit.pred_ho.clone(),
-        };
         let plots = [before_fit_c, after_fit_c, before_ho_c, fit.pred_ho.clone()];
-        Ok(Accepted { named, fit, pred_ho_model, region, plots })
+        Ok(Accepted { named, fit, region, plots })
     }
 
     /// Scores `todo` on the configured worker threads, results in `todo`'s order.
-    fn score_all(&self, r: &Round<'_>, todo: &[Effect], m_tests: usize) -> Vec<Scored> {
+    fn score_all(&self, r: &Round, todo: &[Effect], m_tests: usize) -> Vec<Scored> {
         let threads = self.cfg.threads.max(1).min(todo.len().max(1));
         let mut results: Vec<Option<Scored>> = vec![None; todo.len()];
         std::thread::scope(|sc| {
@@ -734,7 +760,7 @@ impl Ctx<'_> {
 
     /// State candidates that explain the data only when scored without the form error: the
     /// logs cannot tell them from the operating point.
-    fn not_identifiable(&self, r: &Round<'_>, scores: &[CandidateScore], m_tests: usize) -> Vec<String> {
+    fn not_identifiable(&self, r: &Round, scores: &[CandidateScore], m_tests: usize) -> Vec<String> {
         let mut out = Vec::new();
         for s in scores.iter().filter(|s| s.testable && s.form_corrected && !s.significant) {
             if s.effect == Effect::Transient {
@@ -758,23 +784,24 @@ impl Ctx<'_> {
     }
 }
 
-/// A model under consideration: its effects (fitted on all sweeps), its predictions on all
-/// sweeps and its own held-out predictions (without any form-error correction).
-#[derive(Clone)]
-struct Model {
-    present: Vec<EffectParams>,
-    cur_fit: Vec<[f64; 4]>,
-    cur_ho: Vec<[f64; 4]>,
-}
-
-/// The search's state: the model so far, what is named (in order, one round each), the plots,
-/// and the model as it was before the first state effect with the count named then (the
-/// backward check returns to it when no state effect stands on its own).
+/// The search's state: the model so far (its effects, fitted on all sweeps), what is named (in
+/// order, one round each), the plots, and the model as it was before the first state effect
+/// with the count named then (the backward check returns to it when no state effect stands on
+/// its own).
 struct Search {
-    model: Model,
+    model: Vec<EffectParams>,
     named: Vec<NamedEffect>,
     plot: PlotData,
-    before_state: Option<(usize, Model)>,
+    before_state: Option<(usize, Vec<EffectParams>)>,
+}
+
+/// Keeps the entries of `v` whose index passes `keep`.
+fn keep_indices<T>(v: &mut Vec<T>, keep: &dyn Fn(usize) -> bool) {
+    let mut i = 0;
+    v.retain(|_| {
+        i += 1;
+        keep(i - 1)
+    });
 }
 
 impl Search {
@@ -789,53 +816,68 @@ impl Search {
         self.plot.after_heldout.push(after_ho_c);
         self.plot.region.push(acc.region);
         self.named.push(acc.named);
-        self.model = Model { present: acc.fit.model, cur_fit: acc.fit.pred_fit, cur_ho: acc.pred_ho_model };
+        self.model = acc.fit.model;
     }
 
-    /// Removes the `i`-th named effect (the model is the caller's to set).
-    fn remove(&mut self, i: usize) {
-        self.named.remove(i);
+    /// Keeps the named effects (and their plots) whose index passes `keep`; returns the others.
+    /// The model is the caller's to set.
+    fn keep_named(&mut self, keep: &dyn Fn(usize) -> bool) -> Vec<NamedEffect> {
         let p = &mut self.plot;
         for v in [&mut p.before, &mut p.after, &mut p.before_heldout, &mut p.after_heldout] {
-            if i < v.len() {
-                v.remove(i);
-            }
+            keep_indices(v, keep);
         }
-        if i < p.region.len() {
-            p.region.remove(i);
+        keep_indices(&mut p.region, keep);
+        let mut gone = Vec::new();
+        for (i, n) in std::mem::take(&mut self.named).into_iter().enumerate() {
+            if keep(i) { self.named.push(n) } else { gone.push(n) }
         }
+        gone
     }
 }
 
 impl Ctx<'_> {
-    /// The form error of a model with predictions `cur_fit` (all sweeps) and `cur_ho` (held-out).
-    fn form_error(&self, cur_fit: &[[f64; 4]], cur_ho: &[[f64; 4]], bw: &Bandwidths) -> FormError {
-        let per_fold = form::cross_fitted(self.ds, &residual(&self.meas, cur_ho), &self.fl, bw);
-        let all = form::leave_one_sweep_out(self.ds, &residual(&self.meas, cur_fit), bw);
-        let before_heldout: Vec<[f64; 4]> = (0..self.ds.len())
-            .map(|k| std::array::from_fn(|ch| cur_ho[k][ch] + per_fold[self.fold_of[k]][k][ch]))
-            .collect();
-        FormError { per_fold, all, before_heldout }
+    /// The round of a present model: its linearisation, held-out baseline and form error.
+    fn round(&self, present: Vec<EffectParams>, bw: &Bandwidths) -> Round {
+        let lin = linfit::linearize(&self.ev, &present);
+        let cur_fit = lin.pred.clone();
+        let (states, fixed): (Vec<EffectParams>, Vec<EffectParams>) =
+            present.iter().cloned().partition(|e| state::is_state_scaling(e.effect));
+        let design =
+            (!states.is_empty()).then(|| linfit::Design::new(&self.ev, states.clone(), &present_terms(&states)));
+        // The present model on held-out sweeps as a state candidate's fit is evaluated: its
+        // state effects refitted per fold (to `target`, plus `add` on the held-out fold).
+        let refit = |target: &dyn Fn(usize, usize) -> [f64; 4], add: &dyn Fn(usize, usize) -> [f64; 4]| match &design {
+            Some(d) => linfit::cross_validate(&self.ev, d, &fixed, &lin, &self.fl, target, add, &self.sigma),
+            None => (0..self.ds.len())
+                .map(|k| {
+                    let a = add(self.fold_of[k], k);
+                    std::array::from_fn(|c| cur_fit[k][c] + a[c])
+                })
+                .collect(),
+        };
+        let cur_ho = refit(&|_, k| self.meas[k], &|_, _| [0.0; 4]);
+        let form_error = self.cfg.form_correction.then(|| {
+            let per_fold = form::cross_fitted(self.ds, &residual(&self.meas, &cur_ho), &self.fl, bw);
+            let all = form::leave_one_sweep_out(self.ds, &residual(&self.meas, &cur_fit), bw);
+            let before_heldout =
+                refit(&|fi, k| std::array::from_fn(|c| self.meas[k][c] - per_fold[fi][k][c]), &|fi, k| per_fold[fi][k]);
+            FormError { per_fold, all, before_heldout }
+        });
+        Round { present, cur_fit, cur_ho, form_error, lin }
     }
 
-    /// The model without the state effect `drop`: the other state effects refitted jointly
-    /// (their held-out predictions by refitting per fold), the non-state effects kept at their
-    /// fit. `fe` is the full model's form error: what no state effect explains, so the others
-    /// may take over whatever `drop` explained. `None` when no other state effect is left.
-    fn without(&self, full: &Model, drop: Effect, fe: Option<&FormError>) -> Option<Model> {
+    /// The model without the state effect `drop`: the last other state effect refitted with
+    /// the rest held (jointly with them through the linearisation), the non-state effects kept
+    /// at their fit. The full model's form error is what no state effect explains, so the
+    /// others may take over whatever `drop` explained. `None` when no other state effect is
+    /// left.
+    fn without(&self, full: &Round, drop: Effect) -> Option<Vec<EffectParams>> {
         let others: Vec<EffectParams> = full.present.iter().filter(|e| e.effect != drop).cloned().collect();
         let last = others.iter().rev().find(|e| state::is_state_scaling(e.effect))?.effect;
         let rest: Vec<EffectParams> = others.into_iter().filter(|e| e.effect != last).collect();
         let lin = linfit::linearize(&self.ev, &rest);
-        let round = Round { present: &rest, cur_ho: &full.cur_ho, form_error: fe, lin: &lin };
-        let (fit, _) = self.fit_state(&round, last, fe)?;
-        let cur_ho = match fe {
-            Some(f) => (0..self.ds.len())
-                .map(|k| std::array::from_fn(|c| fit.pred_ho[k][c] - f.per_fold[self.fold_of[k]][k][c]))
-                .collect(),
-            None => fit.pred_ho,
-        };
-        Some(Model { present: fit.model, cur_fit: fit.pred_fit, cur_ho })
+        let (fit, _) = self.fit_state(&rest, &lin, last, full.form_error.as_ref())?;
+        Some(fit.model)
     }
 
     /// Masking: two state effects hidden together can each fail the bootstrap alone — the
@@ -848,10 +890,9 @@ impl Ctx<'_> {
     /// steps). The backward check then asks the first to be significant given the second.
     fn masked_pair(
         &self,
-        r: &Round<'_>,
+        r: &Round,
         scores: &[CandidateScore],
         fits: &[Option<CandidateFit>],
-        cur_fit: &[[f64; 4]],
         named: &[Effect],
         bw: &Bandwidths,
     ) -> Option<(Accepted, Accepted, Vec<CandidateScore>)> {
@@ -866,11 +907,8 @@ impl Ctx<'_> {
         let n_firsts = firsts.len();
         for i in firsts {
             let Some(fit) = fits[i].clone() else { continue };
-            let Ok(first) = self.judge(r, &scores[i], fit, cur_fit, None) else { continue };
-            let present = first.fit.model.clone();
-            let fe = self.cfg.form_correction.then(|| self.form_error(&first.fit.pred_fit, &first.pred_ho_model, bw));
-            let lin = linfit::linearize(&self.ev, &present);
-            let r2 = Round { present: &present, cur_ho: &first.pred_ho_model, form_error: fe.as_ref(), lin: &lin };
+            let Ok(first) = self.judge(r, &scores[i], fit, None) else { continue };
+            let r2 = self.round(first.fit.model.clone(), bw);
             let todo: Vec<Effect> = self
                 .cfg
                 .candidates
@@ -885,7 +923,7 @@ impl Ctx<'_> {
             order.sort_by(|&a, &b| s2[b].evidence.total_cmp(&s2[a].evidence));
             for j in order {
                 let Some(fit2) = f2[j].clone() else { continue };
-                match self.judge(&r2, &s2[j], fit2, &first.fit.pred_fit, None) {
+                match self.judge(&r2, &s2[j], fit2, None) {
                     Ok(second) => return Some((first, second, s2)),
                     Err(why) => {
                         s2[j].significant = false;
@@ -911,14 +949,11 @@ impl Ctx<'_> {
                 self.alone_or_nothing(search, rounds, &mut dropped);
                 return dropped;
             }
-            let model = &search.model;
-            let full_fe = self.cfg.form_correction.then(|| self.form_error(&model.cur_fit, &model.cur_ho, bw));
-            let mut weakest: Option<(CandidateScore, Model)> = None;
+            let full = self.round(search.model.clone(), bw);
+            let mut weakest: Option<(CandidateScore, Vec<EffectParams>)> = None;
             for &e in &state_named {
-                let Some(rest) = self.without(model, e, full_fe.as_ref()) else { continue };
-                let fe = self.cfg.form_correction.then(|| self.form_error(&rest.cur_fit, &rest.cur_ho, bw));
-                let lin = linfit::linearize(&self.ev, &rest.present);
-                let round = Round { present: &rest.present, cur_ho: &rest.cur_ho, form_error: fe.as_ref(), lin: &lin };
+                let Some(rest) = self.without(&full, e) else { continue };
+                let round = self.round(rest, bw);
                 let m_tests = self
                     .cfg
                     .candidates
@@ -926,9 +961,9 @@ impl Ctx<'_> {
                     .filter(|c| **c == e || !search.named.iter().any(|n| n.effect == **c))
                     .filter(|c| untestable_reason(**c, self.ds).is_none())
                     .count();
-                let (score, _) = self.score(&round, e, fe.is_some(), m_tests);
+                let (score, _) = self.score(&round, e, round.form_error.is_some(), m_tests);
                 if !score.significant && weakest.as_ref().is_none_or(|(w, _)| score.evidence < w.evidence) {
-                    weakest = Some((score, rest));
+                    weakest = Some((score, round.present));
                 }
             }
             let Some((score, rest)) = weakest else { return dropped };
@@ -944,7 +979,7 @@ impl Ctx<'_> {
                 score.folds,
             ));
             if let Some(i) = search.named.iter().position(|n| n.effect == score.effect) {
-                search.remove(i);
+                search.keep_named(&|j| j != i);
             }
             search.model = rest;
         }
@@ -974,19 +1009,12 @@ impl Ctx<'_> {
             return;
         }
         let p = alone.map_or(1.0, |s| s.p_value);
-        for n in search.named.drain(k0..) {
+        for n in search.keep_named(&|j| j < k0) {
             dropped.push(format!(
                 "{} dropped: alone it was not significant (bootstrap p = {p:.3}), and the state effect it was named with is gone",
                 n.effect.name()
             ));
         }
-        let keep = |v: &mut Vec<Vec<[f64; 4]>>| v.truncate(k0);
-        let pl = &mut search.plot;
-        keep(&mut pl.before);
-        keep(&mut pl.after);
-        keep(&mut pl.before_heldout);
-        keep(&mut pl.after_heldout);
-        pl.region.truncate(k0);
         search.model = before;
     }
 }
@@ -1062,7 +1090,7 @@ pub fn diagnose(ds: &Dataset, base: &TyreParams, cfg: &DoctorConfig) -> Result<D
     let ctx = Ctx { ds, base, cfg, ev, meas, sigma, fl, fold_of, all, n_res, coverage };
 
     let mut search = Search {
-        model: Model { present: Vec::new(), cur_fit: base_pred.clone(), cur_ho: base_pred.clone() },
+        model: Vec::new(),
         named: Vec::new(),
         plot: PlotData { meas: ctx.meas.clone(), base: base_pred.clone(), ..Default::default() },
         before_state: None,
@@ -1070,10 +1098,22 @@ pub fn diagnose(ds: &Dataset, base: &TyreParams, cfg: &DoctorConfig) -> Result<D
     let mut rounds = Vec::new();
     let mut stop_reason = String::new();
     let mut not_identifiable = Vec::new();
+    let mut held_back = Vec::new();
 
-    while search.named.len() < cfg.max_effects {
-        let Model { present, cur_fit, cur_ho } = &search.model;
-        let chi_before: f64 = total(chi2(&ctx.meas, cur_ho, &ctx.sigma, &ctx.all));
+    loop {
+        let done: Vec<Effect> = search.named.iter().map(|n| n.effect).collect();
+        let named_of = |f: Family| search.named.iter().filter(|n| n.family == f).count();
+        let todo: Vec<Effect> = cfg
+            .candidates
+            .iter()
+            .copied()
+            .filter(|e| !done.contains(e) && named_of(e.family()) < cfg.max_effects)
+            .collect();
+        if todo.is_empty() {
+            break;
+        }
+        let round = ctx.round(search.model.clone(), &bandwidths);
+        let chi_before: f64 = total(chi2(&ctx.meas, &round.cur_ho, &ctx.sigma, &ctx.all));
         let excess = chi_before / n_res - 1.0;
         if excess < cfg.min_excess {
             stop_reason = format!(
@@ -1084,12 +1124,6 @@ pub fn diagnose(ds: &Dataset, base: &TyreParams, cfg: &DoctorConfig) -> Result<D
             );
             break;
         }
-        // The present model's form error (state candidates are scored against it).
-        let form_error = cfg.form_correction.then(|| ctx.form_error(cur_fit, cur_ho, &bandwidths));
-        let lin = linfit::linearize(&ctx.ev, present);
-        let round = Round { present, cur_ho, form_error: form_error.as_ref(), lin: &lin };
-        let done: Vec<Effect> = search.named.iter().map(|n| n.effect).collect();
-        let todo: Vec<Effect> = cfg.candidates.iter().copied().filter(|e| !done.contains(e)).collect();
         let m_tests = todo.iter().filter(|e| untestable_reason(**e, ds).is_none()).count();
         let (mut scores, fits): (Vec<CandidateScore>, Vec<Option<CandidateFit>>) =
             ctx.score_all(&round, &todo, m_tests).into_iter().unzip();
@@ -1102,10 +1136,16 @@ pub fn diagnose(ds: &Dataset, base: &TyreParams, cfg: &DoctorConfig) -> Result<D
             if !scores[bi].significant {
                 continue;
             }
+            if let Some(why) = state_explains_more(&scores, &order[..pos], bi, cfg) {
+                scores[bi].significant = false;
+                held_back.push(format!("{} not named: {why}", scores[bi].effect.name()));
+                scores[bi].reason = why;
+                continue;
+            }
             let Some(fit) = fits[bi].clone() else { continue };
             let runner_up =
                 order.iter().enumerate().find(|(p, _)| *p != pos).map(|(_, &i)| (scores[i].effect, scores[i].evidence));
-            match ctx.judge(&round, &scores[bi], fit, cur_fit, runner_up) {
+            match ctx.judge(&round, &scores[bi], fit, runner_up) {
                 Ok(a) => {
                     accepted = Some(a);
                     break;
@@ -1121,8 +1161,8 @@ pub fn diagnose(ds: &Dataset, base: &TyreParams, cfg: &DoctorConfig) -> Result<D
             search.accept(acc);
             continue;
         }
-        let pair = (done.len() + 2 <= cfg.max_effects)
-            .then(|| ctx.masked_pair(&round, &scores, &fits, cur_fit, &done, &bandwidths))
+        let pair = (named_of(Family::State) + 2 <= cfg.max_effects)
+            .then(|| ctx.masked_pair(&round, &scores, &fits, &done, &bandwidths))
             .flatten();
         if let Some((first, second, scores2)) = pair {
             rounds.push(scores);
@@ -1131,7 +1171,7 @@ pub fn diagnose(ds: &Dataset, base: &TyreParams, cfg: &DoctorConfig) -> Result<D
             search.accept(second);
             continue;
         }
-        if form_error.is_some() {
+        if round.form_error.is_some() {
             not_identifiable = ctx.not_identifiable(&round, &scores, m_tests);
         }
         stop_reason = no_candidate_reason(&scores, &order, cfg);
@@ -1139,10 +1179,12 @@ pub fn diagnose(ds: &Dataset, base: &TyreParams, cfg: &DoctorConfig) -> Result<D
         break;
     }
     if stop_reason.is_empty() {
-        stop_reason = format!("stopped at the limit of {} effects", cfg.max_effects);
+        stop_reason = format!("stopped at the limit of {} effects of each family", cfg.max_effects);
     }
+    not_identifiable.extend(held_back);
     let dropped = ctx.drop_stand_ins(&mut search, &rounds, &bandwidths);
-    let Search { model: Model { present, cur_fit, cur_ho }, mut named, plot, .. } = search;
+    let Round { present, cur_fit, cur_ho, .. } = ctx.round(std::mem::take(&mut search.model), &bandwidths);
+    let Search { mut named, plot, .. } = search;
     // Keep each named effect's parameters from the final joint fit.
     for ne in &mut named {
         if let Some(p) = present.iter().find(|p| p.effect == ne.effect) {
@@ -1173,6 +1215,31 @@ pub fn diagnose(ds: &Dataset, base: &TyreParams, cfg: &DoctorConfig) -> Result<D
         form_correction: cfg.form_correction,
         plot,
     })
+}
+
+/// Why the form error `bi` is not named in a round although significant: a state candidate
+/// ahead of it (`ahead`: more evidence) explains more of the held-out residual without being
+/// named itself. A misfit of the operating point and a state that changes through the test
+/// are then confounded (a TTC cornering run visits its pressures in time order, so the tread's
+/// temperature and wear grow with them), and naming the form error would be naming a
+/// substitute (benchmark, MF tyre given as the model, TTC plan: `pressure` named for a hidden
+/// thermal effect whose own candidate explained 64 % to pressure's 40 %).
+fn state_explains_more(scores: &[CandidateScore], ahead: &[usize], bi: usize, cfg: &DoctorConfig) -> Option<String> {
+    if scores[bi].family != Family::FormError {
+        return None;
+    }
+    let s = ahead
+        .iter()
+        .map(|&i| &scores[i])
+        .find(|s| s.family == Family::State && s.testable && s.evidence >= cfg.min_evidence)?;
+    Some(format!(
+        "{} explains more of the held-out χ² ({:.1} % against {:.1} %) but is not named itself ({}); the logs \
+         cannot tell this operating-point misfit from a change of the tyre's state",
+        s.effect.name(),
+        100.0 * s.evidence,
+        100.0 * scores[bi].evidence,
+        if s.reason.is_empty() { "not significant" } else { s.reason.as_str() }
+    ))
 }
 
 /// Why nothing was added in the last round.

@@ -38,7 +38,7 @@ pub struct DoctorArgs {
     /// an effect
     #[arg(long, default_value_t = 0.05)]
     min_evidence: f64,
-    /// Most effects named
+    /// Most effects named of each family (state effects, form errors)
     #[arg(long, default_value_t = 3)]
     max_effects: usize,
     /// Candidates to test (comma list; default: all of thermal, wear, break_in, transient,
