@@ -450,7 +450,7 @@ impl Ctx<'_> {
         let gains = gain_per_sweep(self.ds, &self.meas, before_ho, &fit.pred_ho, &self.sigma);
         let p_value = bootstrap_p(&gains, penalty, self.cfg.bootstrap_resamples, eff as u64);
         let alpha = self.cfg.false_naming_rate / m_tests.max(1) as f64;
-        let unphysical = self.unphysical(eff, &fit);
+        let unphysical = self.unphysical(eff, &fit.model);
         let significant = evidence >= self.cfg.min_evidence
             && improved + 1 >= self.fl.len()
             && p_value <= alpha
@@ -484,11 +484,11 @@ impl Ctx<'_> {
     /// with sliding energy by at least the radius channel's resolution over the test describes
     /// something else with wear's variable (on the benchmark, break-in's recovery and thermal
     /// drift were named wear).
-    fn unphysical(&self, eff: Effect, fit: &CandidateFit) -> Option<String> {
+    fn unphysical(&self, eff: Effect, model: &[EffectParams]) -> Option<String> {
         if eff != Effect::Wear || !self.coverage.radius {
             return None;
         }
-        let wear = fit.model.iter().find(|e| e.effect == Effect::Wear)?;
+        let wear = model.iter().find(|e| e.effect == Effect::Wear)?;
         let parsed = wear.parsed();
         let rate_mm_per_mj =
             wear.get(&state::term_key(Effect::Wear, state::Term { factor: state::Factor::Radius, basis: 0 }));
@@ -899,7 +899,10 @@ impl Ctx<'_> {
         let mut firsts: Vec<usize> = (0..scores.len())
             .filter(|&i| {
                 let s = &scores[i];
-                s.testable && s.family == Family::State && s.evidence >= self.cfg.min_evidence && fits[i].is_some()
+                s.testable
+                    && s.family == Family::State
+                    && s.evidence >= self.cfg.min_evidence
+                    && fits[i].as_ref().is_some_and(|f| self.unphysical(s.effect, &f.model).is_none())
             })
             .collect();
         firsts.sort_by(|&a, &b| scores[b].evidence.total_cmp(&scores[a].evidence));
@@ -1008,15 +1011,19 @@ impl Ctx<'_> {
                 && s.folds_improved + 1 >= s.folds
                 && s.p_value <= self.cfg.false_naming_rate
         };
-        if alone.is_none_or(stands) {
+        // And it must still be the effect it is named after in the model it is left in (wear
+        // whose radius rises is not wear: brush race break-in, wear named as a masked pair's
+        // first step and left alone after the drops).
+        let unphysical = self.unphysical(last, &search.model);
+        if alone.is_none_or(stands) && unphysical.is_none() {
             return;
         }
-        let p = alone.map_or(1.0, |s| s.p_value);
+        let why = match unphysical {
+            Some(u) => u,
+            None => format!("alone it was not significant (bootstrap p = {:.3})", alone.map_or(1.0, |s| s.p_value)),
+        };
         for n in search.keep_named(&|j| j < k0) {
-            dropped.push(format!(
-                "{} dropped: alone it was not significant (bootstrap p = {p:.3}), and the state effect it was named with is gone",
-                n.effect.name()
-            ));
+            dropped.push(format!("{} dropped: {why}, and the state effect it was named with is gone", n.effect.name()));
         }
         search.model = before;
     }
