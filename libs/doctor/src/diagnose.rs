@@ -942,7 +942,7 @@ impl Ctx<'_> {
     /// one named after it (thermal drift, wear and break-in all grow through a test, and the
     /// best single form takes the first round). Each named state effect is scored again as the
     /// last addition to a model holding all the others, refitted without it; while one is not
-    /// significant there, the weakest is dropped.
+    /// significant there (and not inseparable from them), the weakest is dropped.
     fn drop_stand_ins(&self, search: &mut Search, rounds: &[Vec<CandidateScore>], bw: &Bandwidths) -> Vec<String> {
         let mut dropped = Vec::new();
         loop {
@@ -957,15 +957,20 @@ impl Ctx<'_> {
             for &e in &state_named {
                 let Some(rest) = self.without(&full, e) else { continue };
                 let round = self.round(rest, bw);
-                let m_tests = self
-                    .cfg
-                    .candidates
-                    .iter()
-                    .filter(|c| **c == e || !search.named.iter().any(|n| n.effect == **c))
-                    .filter(|c| untestable_reason(**c, self.ds).is_none())
-                    .count();
-                let (score, _) = self.score(&round, e, round.form_error.is_some(), m_tests);
-                if !score.significant && weakest.as_ref().is_none_or(|(w, _)| score.evidence < w.evidence) {
+                // One effect the forward search already chose is confirmed at the plain rate α
+                // (at α/m, wear explaining 11.3 % beside thermal, p = 0.007 in 4/4 folds, was
+                // dropped on the brush race tyre where both were hidden).
+                let (score, _) = self.score(&round, e, round.form_error.is_some(), 1);
+                // A stand-in adds about nothing once the others are in (the drops measured on
+                // the benchmark: −1.2 to +3.7 %). A re-score far below zero says the joint refit
+                // cannot separate it from them (brush road tyre, thermal + wear: thermal at
+                // −26 % beside wear refitted without it, +19 % in the forward round), which is
+                // no evidence that it stood in for them: it stays.
+                let inseparable = score.evidence < -self.cfg.min_evidence;
+                if !score.significant
+                    && !inseparable
+                    && weakest.as_ref().is_none_or(|(w, _)| score.evidence < w.evidence)
+                {
                     weakest = Some((score, round.present));
                 }
             }
