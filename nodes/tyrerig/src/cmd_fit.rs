@@ -81,6 +81,12 @@ fn read_any(path: &Path) -> Result<(mffit::Dataset, Vec<String>)> {
 
 /// Runs the fit.
 pub fn run(args: FitArgs) -> Result<()> {
+    // The folder of the property file is made before the fit, so a path that cannot be written
+    // fails in a moment, not after it.
+    if let Some(dir) = args.out.parent().filter(|d| !d.as_os_str().is_empty()) {
+        std::fs::create_dir_all(dir)
+            .with_context(|| format!("{}: cannot create the folder for --out", dir.display()))?;
+    }
     let mut data = mffit::Dataset::default();
     let mut data_warnings = Vec::new();
     for p in &args.logs {

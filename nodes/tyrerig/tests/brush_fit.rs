@@ -43,8 +43,10 @@ fn race_brush_tyre_ttc_runs_fit_physical_and_within_the_limits() {
     std::fs::create_dir_all(&dir).expect("scratch dir");
     let (cornering, drive_brake, repeat) =
         (fixture("race_cornering.dat"), fixture("race_drive_brake.dat"), fixture("race_drive_brake_tyre2.dat"));
-    let (json, stderr) = fit(&dir, "race.tir", &[&cornering, &drive_brake, "--validate", &repeat, "--folds", "3"]);
-    assert!(dir.join("race.tir").exists(), "no .tir written");
+    // `--out` into a folder that does not exist yet: the command makes it.
+    let (json, stderr) =
+        fit(&dir, "model/race.tir", &[&cornering, &drive_brake, "--validate", &repeat, "--folds", "3"]);
+    assert!(dir.join("model/race.tir").exists(), "no .tir written into the folder --out names");
     assert!(json["nonphysical_stages"].as_array().is_some_and(Vec::is_empty), "{}", json["nonphysical_stages"]);
 
     let stage = |name: &str| {
