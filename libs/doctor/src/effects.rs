@@ -452,9 +452,17 @@ impl<'a> Evaluator<'a> {
     fn choice_series(&self, c: &state::Choice) -> (std::borrow::Cow<'_, [f64]>, std::borrow::Cow<'_, [f64]>) {
         use std::borrow::Cow;
         let s = &self.ds.series;
-        let temp = match state::THERMAL_TEMPERATURES.iter().position(|&(src, l)| src == c.source && l == c.lag_s) {
-            Some(i) => Cow::Borrowed(self.lagged_temp[i].as_slice()),
-            None => Cow::Owned(state::lagged(&s.t_s, Self::temp_source(self.ds, c.source), &s.new_tyre, c.lag_s)),
+        let lagged =
+            |lag_s: f64| match state::THERMAL_TEMPERATURES.iter().position(|&(src, l)| src == c.source && l == lag_s) {
+                Some(i) => Cow::Borrowed(self.lagged_temp[i].as_slice()),
+                None => Cow::Owned(state::lagged(&s.t_s, Self::temp_source(self.ds, c.source), &s.new_tyre, lag_s)),
+            };
+        let temp = if c.surface_weight > 0.0 {
+            let (surface, bulk) = (lagged(0.0), lagged(c.lag_s));
+            let w = c.surface_weight;
+            Cow::Owned(surface.iter().zip(bulk.iter()).map(|(a, b)| w * a + (1.0 - w) * b).collect())
+        } else {
+            lagged(c.lag_s)
         };
         let severe = match state::BREAK_IN_THRESHOLDS_W.iter().position(|&t| t == c.threshold_w) {
             Some(i) => Cow::Borrowed(self.severe[i].as_slice()),

@@ -4,10 +4,11 @@
 //! ```text
 //! [TYRERIG_EXTENSIONS]
 //! $ Added by `tyrerig doctor` (docs/doctor.md). MF-Tyre 6.1 readers ignore this section.
-//! FORMAT_VERSION            = 3
+//! FORMAT_VERSION            = 4
 //! EFFECTS                   = 'thermal,wear'
 //! THERMAL_SOURCE            = 0       $ 0: grip temperature (quiet, flash fitted out); 1: laser mean
 //! THERMAL_LAG_S             = 30      $ its first-order lag
+//! THERMAL_SURFACE_WEIGHT    = 0.3     $ T = w·T_read + (1 − w)·T_lagged (0: lagged alone)
 //! THERMAL_TREF_C            = 52.3    $ x = (T_lagged − TREF)/10 K
 //! THERMAL_TMIN_C, THERMAL_TMAX_C    $ T_lagged clamped to this range (2 %/98 % of the data)
 //! THERMAL_NEUTRAL_1, _2             $ N1, N2: x and x² measured from them (0 for a given model)
@@ -45,7 +46,7 @@ pub fn extended_params(base: &TyreParams, effects: &[EffectParams], refs: &state
     sec.lines
         .push("$ Added by `tyrerig doctor` (see docs/doctor.md). MF-Tyre 6.1 readers ignore this section;".to_owned());
     sec.lines.push("$ the terms need state inputs (grip temperature, sliding energy, travelled distance).".to_owned());
-    sec.set("FORMAT_VERSION", TirValue::Number(3.0));
+    sec.set("FORMAT_VERSION", TirValue::Number(4.0));
     let names: Vec<&str> = effects.iter().map(|e| e.effect.name()).collect();
     sec.set("EFFECTS", TirValue::Text(names.join(",")));
     for e in effects {
@@ -70,8 +71,9 @@ pub fn extended_params(base: &TyreParams, effects: &[EffectParams], refs: &state
 /// The state an extended model needs beyond MF-Tyre 6.1's inputs.
 #[derive(Debug, Clone, Copy, Default)]
 pub struct ExtState {
-    /// The temperature `THERMAL_SOURCE` names (0: grip temperature, 1: the tread lasers' mean)
-    /// through the first-order lag `THERMAL_LAG_S` [°C].
+    /// The temperature `THERMAL_SOURCE` names (0: grip temperature, 1: the tread lasers' mean):
+    /// `THERMAL_SURFACE_WEIGHT` of it as read plus the rest through the first-order lag
+    /// `THERMAL_LAG_S` [°C].
     pub temp_grip_c: f64,
     /// Sliding energy on the tyre so far [MJ].
     pub sliding_energy_mj: f64,

@@ -118,6 +118,13 @@ pub const THERMAL_TEMPERATURES: [(TempSource, f64); 8] = [
     (TempSource::Laser, 300.0),
 ];
 
+/// Shares of the unlagged temperature mixed into a lagged one, tried by `thermal` for every
+/// lag above zero: a tread's grip follows its bulk, which lags the surface, and its surface,
+/// which does not (T = w·T_surface + (1 − w)·T_lagged). One lag alone left a bulk-dominated
+/// effect half explained and break-in named for the rest (benchmark, MF tyre: a drawn thermal
+/// effect with 27 % surface and a 96 s bulk lag).
+pub const THERMAL_SURFACE_WEIGHTS: [f64; 2] = [0.0, 0.3];
+
 /// Which measured temperature a thermal effect reads.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
 pub enum TempSource {
@@ -132,6 +139,8 @@ pub const BREAK_IN_ENERGIES_KJ: [f64; 6] = [10.0, 30.0, 100.0, 300.0, 1000.0, 30
 /// Break-in's power thresholds tried [W].
 pub const BREAK_IN_THRESHOLDS_W: [f64; 4] = [0.0, 5_000.0, 10_000.0, 20_000.0];
 
+/// Key of the share of the unlagged temperature in the thermal temperature.
+pub const KEY_THERMAL_SURFACE_WEIGHT: &str = "THERMAL_SURFACE_WEIGHT";
 /// Key of the thermal lag in the extension section.
 pub const KEY_THERMAL_LAG_S: &str = "THERMAL_LAG_S";
 /// Key of the thermal temperature source (0: grip temperature, 1: laser mean).
@@ -168,6 +177,8 @@ pub struct Choice {
     pub source: TempSource,
     /// Thermal: its first-order lag [s].
     pub lag_s: f64,
+    /// Thermal: the share of the unlagged temperature mixed in ([`THERMAL_SURFACE_WEIGHTS`]).
+    pub surface_weight: f64,
     /// Thermal: reference temperature (median over the points) [°C].
     pub t_ref_c: f64,
     /// Thermal: temperatures beyond this range are taken at its ends [°C] (lo > hi: none). A
@@ -193,6 +204,7 @@ impl Default for Choice {
         Self {
             source: TempSource::Grip,
             lag_s: 0.0,
+            surface_weight: 0.0,
             t_ref_c: 0.0,
             t_range_c: [f64::INFINITY, f64::NEG_INFINITY],
             energy_kj: 0.0,
@@ -209,7 +221,7 @@ impl Choice {
     /// Knobs counted as parameters (each discrete choice made on the data).
     pub fn n_knobs(effect: Effect) -> usize {
         match effect {
-            Effect::Thermal => 2,
+            Effect::Thermal => 3,
             Effect::BreakIn => 2,
             _ => 0,
         }
@@ -221,7 +233,16 @@ impl Choice {
         match effect {
             Effect::Thermal => THERMAL_TEMPERATURES
                 .iter()
-                .map(|&(source, lag_s)| Choice { source, lag_s, ..Choice::default() })
+                .flat_map(|&(source, lag_s)| {
+                    let weights =
+                        if lag_s > 0.0 { &THERMAL_SURFACE_WEIGHTS[..] } else { &THERMAL_SURFACE_WEIGHTS[..1] };
+                    weights.iter().map(move |&surface_weight| Choice {
+                        source,
+                        lag_s,
+                        surface_weight,
+                        ..Choice::default()
+                    })
+                })
                 .collect(),
             Effect::BreakIn => BREAK_IN_THRESHOLDS_W
                 .iter()
@@ -243,6 +264,7 @@ impl Choice {
             Effect::Thermal => vec![
                 (KEY_THERMAL_SOURCE.to_owned(), f64::from(u8::from(self.source == TempSource::Laser))),
                 (KEY_THERMAL_LAG_S.to_owned(), self.lag_s),
+                (KEY_THERMAL_SURFACE_WEIGHT.to_owned(), self.surface_weight),
                 (KEY_THERMAL_TREF_C.to_owned(), self.t_ref_c),
                 (KEY_THERMAL_TMIN_C.to_owned(), self.t_range_c[0]),
                 (KEY_THERMAL_TMAX_C.to_owned(), self.t_range_c[1]),
@@ -457,6 +479,8 @@ impl Parsed {
         for (k, v) in entries {
             if k.eq_ignore_ascii_case(KEY_THERMAL_LAG_S) {
                 out.choice.lag_s = v;
+            } else if k.eq_ignore_ascii_case(KEY_THERMAL_SURFACE_WEIGHT) {
+                out.choice.surface_weight = v;
             } else if k.eq_ignore_ascii_case(KEY_THERMAL_SOURCE) {
                 out.choice.source = if v >= 0.5 { TempSource::Laser } else { TempSource::Grip };
             } else if k.eq_ignore_ascii_case(KEY_THERMAL_TREF_C) {
