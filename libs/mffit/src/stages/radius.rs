@@ -128,7 +128,10 @@ impl Stage for Radius {
             steps = vec![("all keys", candidates.clone(), judged.points.clone())];
         }
         run_steps(ctx, params, rep, Channel::Rl, rr, &steps, None)?;
-        finish(ctx, params, &start, rep, Channel::Rl, data, None)?;
+        // Judged and refitted on every loaded-radius point: refitted on the near-free-rolling points
+        // alone, the force terms drift to whatever fits there (a thermal radius growth moved Q_FCY
+        // to 0.14, a 7 mm drop at 10° the cornering sweeps do not show).
+        finish(ctx, params, &start, rep, Channel::Rl, &judged, None)?;
         // Effective rolling radius from the free-rolling wheel speed: Re = Vx/Ω.
         let re = ctx.points(
             |s| rolling_radius(s) || cornering(s, ctx),
