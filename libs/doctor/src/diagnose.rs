@@ -451,15 +451,29 @@ impl Ctx<'_> {
         let p_value = bootstrap_p(&gains, penalty, self.cfg.bootstrap_resamples, eff as u64);
         let alpha = self.cfg.false_naming_rate / m_tests.max(1) as f64;
         let unphysical = self.unphysical(eff, &fit.model);
-        let significant = evidence >= self.cfg.min_evidence
-            && improved + 1 >= self.fl.len()
-            && p_value <= alpha
-            && unphysical.is_none();
-        let reason = if evidence >= self.cfg.min_evidence && p_value > alpha {
+        let holds = evidence >= self.cfg.min_evidence && improved + 1 >= self.fl.len() && unphysical.is_none();
+        let mut significant = holds && p_value <= alpha;
+        let mut reason = if evidence >= self.cfg.min_evidence && p_value > alpha {
             format!("not significant: bootstrap p = {p_value:.3} > {alpha:.4} (gain not consistent over sweeps)")
         } else {
             unphysical.unwrap_or_default()
         };
+        // Confirmed by the plain residual: taking the form error out also takes out most of the
+        // sweeps a strong state effect moves the most (the cold first sweep, the hot last
+        // cells), and the gain left is real but uneven over sweeps. A candidate significant on
+        // the plain residual at the round's rate, whose gain with the form error taken out is
+        // still the evidence threshold and consistent at the plain rate, is named: the plain
+        // score says it is there, the corrected one that it is not the form error.
+        if !significant && fe.is_some() && holds && p_value <= self.cfg.false_naming_rate {
+            let (plain, _) = self.score(r, eff, false, m_tests);
+            if plain.significant {
+                significant = true;
+                reason = format!(
+                    "significant: on the plain residual (evidence {:.3}, p = {:.4} ≤ {alpha:.4}), and with the form error taken out (p = {p_value:.3} ≤ {})",
+                    plain.evidence, plain.p_value, self.cfg.false_naming_rate
+                );
+            }
+        }
         let s = CandidateScore {
             effect: eff,
             family: eff.family(),
@@ -762,7 +776,11 @@ impl Ctx<'_> {
     /// logs cannot tell them from the operating point.
     fn not_identifiable(&self, r: &Round, scores: &[CandidateScore], m_tests: usize) -> Vec<String> {
         let mut out = Vec::new();
-        for s in scores.iter().filter(|s| s.testable && s.form_corrected && !s.significant) {
+        // Only where the form error takes the effect away: a candidate that keeps its evidence
+        // with the form error out but fails the bootstrap, or is rejected for harming a channel,
+        // is reported as such, not as unidentifiable.
+        let taken_away = |s: &&CandidateScore| s.evidence < self.cfg.min_evidence;
+        for s in scores.iter().filter(|s| s.testable && s.form_corrected && !s.significant).filter(taken_away) {
             if s.effect == Effect::Transient {
                 continue;
             }

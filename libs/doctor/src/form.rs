@@ -9,9 +9,11 @@
 //! operating point disagree. So state candidates are scored against the present model **plus**
 //! a smooth, cross-fitted estimate of that fixed misfit: a kernel average of the residual of
 //! *other sweeps* at neighbouring operating points (local-linear kernel regression, Gaussian
-//! kernels in slip angle, slip ratio, load, camber and pressure). A point is never corrected with its own
-//! sweep's residual (that would absorb a sweep-long effect), nor a held-out point with
-//! held-out data.
+//! kernels in slip angle, slip ratio, load, camber and pressure). A point is never corrected with the
+//! residual of its own **visit** — its sweep and the sweeps run straight before or after it at
+//! the same cell, as warm-up sweeps are (that would absorb what the tyre's state was during
+//! the visit: five cold warm-up sweeps corrected by each other keep none of their cold grip) —
+//! nor a held-out point with held-out data.
 //!
 //! Limits: what the effect does *on average* at an operating point is absorbed with the form
 //! error (a test plan that visits hot cells only at high load cannot separate heat from load);
@@ -92,6 +94,47 @@ impl Bandwidths {
 /// The form-error correction of every point for one held-out fold: held-out points from the
 /// training sweeps, training points from the *other* training sweeps.
 pub type FoldCorrection = Vec<[f64; 4]>;
+
+/// Largest difference of two sweeps' median scaled operating point (slip angle, slip ratio,
+/// load, camber, pressure) at which they are at one cell: half a bandwidth.
+const SAME_CELL: f64 = 0.5;
+
+/// The visit of every sweep: consecutive sweeps of one log at one cell (median operating point
+/// within [`SAME_CELL`] in every coordinate) share a visit, and so the tyre's state.
+fn visits(ds: &Dataset, x: &[[f64; 5]]) -> Vec<usize> {
+    let mut coords: Vec<[Vec<f64>; 5]> = vec![Default::default(); ds.sweeps.len()];
+    for (k, p) in x.iter().enumerate() {
+        if let Some(c) = coords.get_mut(ds.point_sweep(k)) {
+            for m in 0..5 {
+                if p[m].is_finite() {
+                    c[m].push(p[m]);
+                }
+            }
+        }
+    }
+    let medians: Vec<Option<[f64; 5]>> = coords
+        .into_iter()
+        .map(|mut c| {
+            c.iter().all(|v| !v.is_empty()).then(|| {
+                std::array::from_fn(|m| {
+                    c[m].sort_by(f64::total_cmp);
+                    c[m][c[m].len() / 2]
+                })
+            })
+        })
+        .collect();
+    let mut visit = Vec::with_capacity(ds.sweeps.len());
+    for i in 0..ds.sweeps.len() {
+        let same = i > 0
+            && ds.sweeps[i].log == ds.sweeps[i - 1].log
+            && match (medians[i], medians[i - 1]) {
+                (Some(a), Some(b)) => (0..5).all(|m| (a[m] - b[m]).abs() <= SAME_CELL),
+                _ => false,
+            };
+        visit.push(if same { visit[i - 1] } else { i });
+    }
+    visit
+}
 
 /// Operating point of a data point, scaled by the bandwidths.
 fn scaled_points(ds: &Dataset, bw: &Bandwidths) -> Vec<[f64; 5]> {
@@ -174,17 +217,24 @@ impl NeighbourIndex {
     }
 }
 
-/// Local-linear kernel regression at point `k` of `resid` over the indexed points whose sweep
+/// Local-linear kernel regression at point `k` of `resid` over the indexed points whose visit
 /// differs from `k`'s: the form error between neighbouring loads, cambers and pressures is
 /// interpolated along its trend, where a plain kernel average would be pulled towards the
 /// side with more data (the highest load of a test has neighbours only below it).
-fn smooth_at(ds: &Dataset, x: &[[f64; 5]], resid: &[[f64; 4]], index: &NeighbourIndex, k: usize) -> [f64; 4] {
+fn smooth_at(
+    ds: &Dataset,
+    x: &[[f64; 5]],
+    visit: &[usize],
+    resid: &[[f64; 4]],
+    index: &NeighbourIndex,
+    k: usize,
+) -> [f64; 4] {
     use nalgebra::{Matrix6, Vector6};
-    let own = ds.point_sweep(k);
+    let own = visit[ds.point_sweep(k)];
     let mut a = [Matrix6::<f64>::zeros(); 4];
     let mut b = [Vector6::<f64>::zeros(); 4];
     index.for_each_near(&x[k], |j| {
-        if ds.point_sweep(j) == own {
+        if visit[ds.point_sweep(j)] == own {
             return;
         }
         let d: [f64; 5] = std::array::from_fn(|m| x[j][m] - x[k][m]);
@@ -217,7 +267,8 @@ fn smooth_at(ds: &Dataset, x: &[[f64; 5]], resid: &[[f64; 4]], index: &Neighbour
 /// of the residual `resid` (measured − present model's held-out prediction).
 pub fn cross_fitted(ds: &Dataset, resid: &[[f64; 4]], folds: &[Vec<usize>], bw: &Bandwidths) -> Vec<FoldCorrection> {
     let x = scaled_points(ds, bw);
-    let (x, resid) = (&x, resid);
+    let visit = visits(ds, &x);
+    let (x, visit, resid) = (&x, &visit, resid);
     // Folds are independent: one worker per fold.
     std::thread::scope(|sc| {
         let handles: Vec<_> = (0..folds.len())
@@ -230,7 +281,7 @@ pub fn cross_fitted(ds: &Dataset, resid: &[[f64; 4]], folds: &[Vec<usize>], bw: 
                         .flat_map(|(_, v)| v.iter().copied())
                         .collect();
                     let index = NeighbourIndex::new(x, &train);
-                    (0..ds.len()).map(|k| smooth_at(ds, x, resid, &index, k)).collect::<FoldCorrection>()
+                    (0..ds.len()).map(|k| smooth_at(ds, x, visit, resid, &index, k)).collect::<FoldCorrection>()
                 })
             })
             .collect();
@@ -239,12 +290,13 @@ pub fn cross_fitted(ds: &Dataset, resid: &[[f64; 4]], folds: &[Vec<usize>], bw: 
     })
 }
 
-/// The correction of every point from all other sweeps (for fits on all sweeps).
+/// The correction of every point from all other visits (for fits on all sweeps).
 pub fn leave_one_sweep_out(ds: &Dataset, resid: &[[f64; 4]], bw: &Bandwidths) -> FoldCorrection {
     let x = scaled_points(ds, bw);
+    let visit = visits(ds, &x);
     let all: Vec<usize> = (0..ds.len()).collect();
     let index = NeighbourIndex::new(&x, &all);
-    (0..ds.len()).map(|k| smooth_at(ds, &x, resid, &index, k)).collect()
+    (0..ds.len()).map(|k| smooth_at(ds, &x, &visit, resid, &index, k)).collect()
 }
 
 #[cfg(test)]
@@ -338,6 +390,47 @@ mod tests {
         for k in (0..ds.len()).filter(|&k| ds.point_sweep(k) == 5) {
             let left = resid[k][0] - corr[k][0];
             assert!((left - 50.0).abs() < 5.0, "point {k}: {left} of the sweep's 50 N left");
+        }
+    }
+
+    #[test]
+    fn sweeps_of_one_visit_do_not_correct_each_other() {
+        // Sweeps 0–2 at one cell in a row (a warm-up) share a +40 N state offset; sweep 3 at
+        // another load, sweep 4 at the first cell again without it.
+        let mut ds = Dataset::default();
+        let mut s = Series::default();
+        let mut resid = Vec::new();
+        for (sweep, (fz, offset)) in
+            [(1000.0, 40.0), (1000.0, 40.0), (1000.0, 40.0), (2000.0, 0.0), (1000.0, 0.0)].into_iter().enumerate()
+        {
+            for j in 0..=100 {
+                ds.points.push(s.alpha_deg.len());
+                s.alpha_deg.push(-5.0 + 0.1 * j as f64);
+                s.kappa.push(0.0);
+                s.fz_n.push(fz);
+                s.gamma_deg.push(0.0);
+                s.p_pa.push(2.5e5);
+                s.sweep.push(sweep);
+                resid.push([offset, 0.0, 0.0, 0.0]);
+            }
+            ds.sweeps.push(SweepInfo {
+                name: format!("sw{sweep}"),
+                index_in_log: sweep as u32,
+                log: "t".into(),
+                ordinal: sweep,
+                coupled: false,
+            });
+        }
+        ds.series = s;
+        let bw = Bandwidths::from_data(&ds);
+        assert_eq!(visits(&ds, &scaled_points(&ds, &bw)), vec![0, 0, 0, 3, 4]);
+        let corr = leave_one_sweep_out(&ds, &resid, &bw);
+        for k in (0..ds.len()).filter(|&k| ds.point_sweep(k) < 3) {
+            assert!(
+                resid[k][0] - corr[k][0] > 30.0,
+                "point {k}: the warm-up's own offset was absorbed ({})",
+                corr[k][0]
+            );
         }
     }
 

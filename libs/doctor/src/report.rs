@@ -310,7 +310,7 @@ pub fn markdown(
             let note = if !c.testable {
                 format!("not testable: {}", c.reason)
             } else if c.significant {
-                "significant".to_owned()
+                if c.reason.is_empty() { "significant".to_owned() } else { c.reason.clone() }
             } else if !c.reason.is_empty() {
                 c.reason.clone()
             } else {

@@ -315,6 +315,16 @@ fn ttc_drive_brake_run_covers_every_cell_at_one_pressure() {
 }
 
 #[test]
+fn the_warm_up_variant_opens_with_five_sweeps_at_a_cell_of_the_grid() {
+    let plain = sweep_cells(&plan_with("ttc_drive_brake_race.toml", race_inputs()));
+    let warm = sweep_cells(&plan_with("ttc_drive_brake_race_warmup.toml", race_inputs()));
+    assert_eq!(warm.len(), plain.len() + 5);
+    assert!(warm[..5].iter().all(|c| *c == (1100.0, 0.84, 0.0, 0.0)), "{:?}", &warm[..5]);
+    assert!(plain.contains(&warm[0]), "the warm-up cell is swept again in the grid");
+    assert_eq!(&warm[5..], &plain[..]);
+}
+
+#[test]
 fn fz0_given_directly_replaces_the_load_index_and_scales_graph_sweeps() {
     let li = plan_with("gs2mf_freerolling.toml", RunInputs::default());
     let direct = plan_with("gs2mf_freerolling.toml", RunInputs { fz0_n: Some(1100.0), ..RunInputs::default() });

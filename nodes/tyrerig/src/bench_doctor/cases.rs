@@ -58,12 +58,13 @@ impl Plan {
     }
 
     /// The procedure files of its runs, under `launch-config/procedures/` (the race tyre runs
-    /// the race TTC procedures, the other two the road ones).
+    /// the race TTC procedures, its drive/brake run opened by warm-up sweeps as the real race
+    /// tyre's is; the other two the road ones, without).
     pub fn procedures(self, tyre: Tyre) -> Vec<&'static str> {
         match (self, tyre) {
             (Plan::Gs2mfFreeRolling, _) => vec!["gs2mf_freerolling.toml"],
             (Plan::SquareMatrix, _) => vec!["square_matrix.toml"],
-            (Plan::Ttc, Tyre::BrushRace) => vec!["ttc_cornering_race.toml", "ttc_drive_brake_race.toml"],
+            (Plan::Ttc, Tyre::BrushRace) => vec!["ttc_cornering_race.toml", "ttc_drive_brake_race_warmup.toml"],
             (Plan::Ttc, _) => vec!["ttc_cornering_road.toml", "ttc_drive_brake_road.toml"],
         }
     }
