@@ -113,7 +113,8 @@ def test_the_fit_node_publishes_a_model_after_every_segment_and_writes_it_at_the
                for st in m.ros_msg.status if st.name == "tyrerig monitor: live_model"]
     assert len(watched) >= len(states) - 1, (len(watched), len(states))
     last = {kv.key: kv.value for kv in watched[-1].values}
-    assert last["updates"] == str(len(states)), last
+    # As above: the final update may land after the monitor's last report at shutdown.
+    assert last["updates"] in (str(len(states)), str(len(states) - 1)), (last, len(states))
     assert last["identified"].endswith(f"/{len(states[-1].stages)}"), last
     assert "fy_pure" in last and watched[-1].message.startswith("live model:"), watched[-1].message
     out = tmp_path / "run_report"
