@@ -304,6 +304,36 @@ mod tests {
     use super::*;
     use crate::data::{Series, SweepInfo};
 
+    /// Appends a slip-angle sweep at `fz` (slip angles 0.1° apart over `alphas`), each
+    /// point's residual from its slip angle.
+    fn push_sweep(
+        (ds, s, resid): (&mut Dataset, &mut Series, &mut Vec<[f64; 4]>),
+        fz: f64,
+        alphas: std::ops::RangeInclusive<f64>,
+        residual: impl Fn(f64) -> [f64; 4],
+    ) {
+        let sweep = ds.sweeps.len();
+        let n = ((alphas.end() - alphas.start()) / 0.1).round() as usize;
+        for j in 0..=n {
+            let a = alphas.start() + 0.1 * j as f64;
+            ds.points.push(s.alpha_deg.len());
+            s.alpha_deg.push(a);
+            s.kappa.push(0.0);
+            s.fz_n.push(fz);
+            s.gamma_deg.push(0.0);
+            s.p_pa.push(2.5e5);
+            s.sweep.push(sweep);
+            resid.push(residual(a));
+        }
+        ds.sweeps.push(SweepInfo {
+            name: format!("sw{sweep}"),
+            index_in_log: sweep as u32,
+            log: "t".into(),
+            ordinal: sweep,
+            coupled: false,
+        });
+    }
+
     /// Six slip-angle sweeps, two at each of three loads, with a residual that is a fixed
     /// function of slip angle and load (the form error) plus, in the last sweep only, a
     /// sweep-long offset (a state effect).
@@ -314,24 +344,9 @@ mod tests {
         let form = |a: f64, fz: f64| 30.0 * (a / 4.0).sin() * fz / 1000.0;
         for sweep in 0..6 {
             let fz = 1000.0 * (1 + sweep % 3) as f64;
-            for j in 0..=200 {
-                let a = -10.0 + 0.1 * j as f64;
-                ds.points.push(s.alpha_deg.len());
-                s.alpha_deg.push(a);
-                s.kappa.push(0.0);
-                s.fz_n.push(fz);
-                s.gamma_deg.push(0.0);
-                s.p_pa.push(2.5e5);
-                s.sweep.push(sweep);
-                let state = if sweep == 5 { 50.0 } else { 0.0 };
-                resid.push([form(a, fz) + state, form(a, fz), f64::NAN, 0.0]);
-            }
-            ds.sweeps.push(SweepInfo {
-                name: format!("sw{sweep}"),
-                index_in_log: sweep as u32,
-                log: "t".into(),
-                ordinal: sweep,
-                coupled: false,
+            let state = if sweep == 5 { 50.0 } else { 0.0 };
+            push_sweep((&mut ds, &mut s, &mut resid), fz, -10.0..=10.0, |a| {
+                [form(a, fz) + state, form(a, fz), f64::NAN, 0.0]
             });
         }
         ds.series = s;
@@ -400,26 +415,8 @@ mod tests {
         let mut ds = Dataset::default();
         let mut s = Series::default();
         let mut resid = Vec::new();
-        for (sweep, (fz, offset)) in
-            [(1000.0, 40.0), (1000.0, 40.0), (1000.0, 40.0), (2000.0, 0.0), (1000.0, 0.0)].into_iter().enumerate()
-        {
-            for j in 0..=100 {
-                ds.points.push(s.alpha_deg.len());
-                s.alpha_deg.push(-5.0 + 0.1 * j as f64);
-                s.kappa.push(0.0);
-                s.fz_n.push(fz);
-                s.gamma_deg.push(0.0);
-                s.p_pa.push(2.5e5);
-                s.sweep.push(sweep);
-                resid.push([offset, 0.0, 0.0, 0.0]);
-            }
-            ds.sweeps.push(SweepInfo {
-                name: format!("sw{sweep}"),
-                index_in_log: sweep as u32,
-                log: "t".into(),
-                ordinal: sweep,
-                coupled: false,
-            });
+        for (fz, offset) in [(1000.0, 40.0), (1000.0, 40.0), (1000.0, 40.0), (2000.0, 0.0), (1000.0, 0.0)] {
+            push_sweep((&mut ds, &mut s, &mut resid), fz, -5.0..=5.0, |_| [offset, 0.0, 0.0, 0.0]);
         }
         ds.series = s;
         let bw = Bandwidths::from_data(&ds);
