@@ -142,13 +142,31 @@ fn brush_tyres_without_thermal_grip_name_nothing() {
 /// called it "not identifiable".
 #[test]
 fn a_strong_thermal_effect_in_ttc_runs_of_a_brush_tyre_is_named() {
-    let dir = PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join("doctor_cli").join("bench_ttc_thermal");
+    let (names, form_errors) = bench_case("brush_race/ttc/thermal/s2", "bench_ttc_thermal");
+    assert_eq!(names, ["thermal"], "named {names:?}, form errors {form_errors}");
+}
+
+/// Issue 30: break-in hidden in a free-rolling GS2MF run of the brush road tyre (the
+/// benchmark's case `brush_road/gs2mf_fr/break_in/s2`, 6.8 σ) is not named thermal. `thermal`
+/// explained 0.346 of the plain residual but only 0.091 with the form error taken out (it was
+/// doing the operating point's work), and the plain score confirmed it by a hair (p 0.0055 ≤
+/// 0.0056): the plain score now confirms only a candidate that keeps half its evidence.
+#[test]
+fn break_in_on_a_free_rolling_brush_road_run_is_not_named_thermal() {
+    let (names, form_errors) = bench_case("brush_road/gs2mf_fr/break_in/s2", "bench_fr_break_in");
+    assert!(!names.contains(&"thermal".to_owned()), "named {names:?}, form errors {form_errors}");
+}
+
+/// Runs one case of `tyrerig bench doctor` in its own work directory; the state effects the
+/// doctor named and its form errors.
+fn bench_case(id: &str, work: &str) -> (Vec<String>, serde_json::Value) {
+    let dir = PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join("doctor_cli").join(work);
     let json = dir.join("bench.json");
     // The benchmark reads its rig configs and procedures from launch-config/ in the repository.
     let root = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../..");
     let o = Command::new(env!("CARGO_BIN_EXE_tyrerig"))
         .current_dir(root)
-        .args(["bench", "doctor", "--cases", "brush_race/ttc/thermal/s2", "--work-dir"])
+        .args(["bench", "doctor", "--cases", id, "--work-dir"])
         .arg(&dir)
         .arg("--json")
         .arg(&json)
@@ -157,8 +175,8 @@ fn a_strong_thermal_effect_in_ttc_runs_of_a_brush_tyre_is_named() {
     assert!(o.status.success(), "tyrerig bench doctor: {}", String::from_utf8_lossy(&o.stderr));
     let d: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(&json).expect("bench json")).unwrap();
     let case = &d["cases"][0];
-    assert_eq!(case["case"].as_str(), Some("brush_race/ttc/thermal/s2"));
+    assert_eq!(case["case"].as_str(), Some(id));
     assert!(case["error"].is_null(), "{}", case["error"]);
-    let names: Vec<&str> = case["named"].as_array().expect("named").iter().filter_map(|v| v.as_str()).collect();
-    assert_eq!(names, ["thermal"], "named {names:?}, form errors {}", case["form_errors"]);
+    let names = case["named"].as_array().expect("named").iter().filter_map(|v| v.as_str().map(str::to_owned)).collect();
+    (names, case["form_errors"].clone())
 }
