@@ -733,6 +733,12 @@ impl Discovery {
       );
       match self.poll.poll(&mut events, Some(poll_timeout)) {
         Ok(_) => (),
+        // tyrerig patch: EINTR (e.g. after SIGSTOP/SIGCONT) is not a failure;
+        // poll again instead of ending discovery. See dp_event_loop.rs.
+        Err(e) if e.kind() == std::io::ErrorKind::Interrupted => {
+          debug!("Discovery poll interrupted (EINTR), polling again");
+          continue;
+        }
         Err(e) => {
           error!("Failed in waiting of poll in discovery. {e:?}");
           return;

@@ -305,6 +305,14 @@ impl DPEventLoop {
       let poll_timeout = timeout_until(ev_wrapper.shared_timer.borrow().next_deadline(), idle_cap);
       match ev_wrapper.poll.poll(&mut events, Some(poll_timeout)) {
         Ok(_) => {}
+        // tyrerig patch: EINTR is not a failure. Linux returns it from epoll_wait
+        // when the process is stopped and continued (SIGSTOP/SIGCONT), even with
+        // no signal handler installed; the loop used to exit here, leaving the
+        // participant deaf and mute. Poll again (the timeout is recomputed).
+        Err(e) if e.kind() == std::io::ErrorKind::Interrupted => {
+          debug!("dp_event_loop poll interrupted (EINTR), polling again");
+          continue;
+        }
         Err(e) => {
           error!("dp_event_loop poll failed: {e:?}");
           break;
