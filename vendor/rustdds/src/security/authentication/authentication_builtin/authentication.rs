@@ -29,9 +29,9 @@ use crate::{
 };
 use super::{
   types::{
-    parse_signature_algo_name_to_ring, BuiltinAuthenticatedPeerCredentialToken,
-    BuiltinIdentityToken, DH_MODP_KAGREE_ALGO_NAME, ECDH_KAGREE_ALGO_NAME,
-    QOS_IDENTITY_CA_PROPERTY_NAME, QOS_IDENTITY_CERTIFICATE_PROPERTY_NAME,
+    parse_signature_algo_name_to_ring, without_trailing_nul,
+    BuiltinAuthenticatedPeerCredentialToken, BuiltinIdentityToken, DH_MODP_KAGREE_ALGO_NAME,
+    ECDH_KAGREE_ALGO_NAME, QOS_IDENTITY_CA_PROPERTY_NAME, QOS_IDENTITY_CERTIFICATE_PROPERTY_NAME,
     QOS_PASSWORD_PROPERTY_NAME, QOS_PRIVATE_KEY_PROPERTY_NAME,
   },
   BuiltinHandshakeState, DHKeys, LocalParticipantInfo, RemoteParticipantInfo,
@@ -553,9 +553,11 @@ impl Authentication for AuthenticationBuiltin {
 
     // Check which key agreement algorithm the remote has chosen & generate our own
     // key pair
-    let dh2_keys = if request.c_kagree_algo == *DH_MODP_KAGREE_ALGO_NAME {
+    // tyrerig patch: compare without one trailing NUL (see without_trailing_nul)
+    let request_kagree_algo = without_trailing_nul(&request.c_kagree_algo);
+    let dh2_keys = if request_kagree_algo == DH_MODP_KAGREE_ALGO_NAME.as_bytes() {
       DHKeys::new_modp_keys()?
-    } else if request.c_kagree_algo == *ECDH_KAGREE_ALGO_NAME {
+    } else if request_kagree_algo == ECDH_KAGREE_ALGO_NAME.as_bytes() {
       DHKeys::new_ec_keys(&self.secure_random_generator)?
     } else {
       return Err(create_security_error_and_log!(
@@ -789,6 +791,17 @@ impl Authentication for AuthenticationBuiltin {
           debug!("Cannot compare hashes in process_handshake. Reply did not have any.");
         }
 
+        // tyrerig patch: the reply's dh1 is optional; it must be our own DH1
+        // public key when present, and ours is what the replier signed.
+        let dh1_public_key = dh1.public_key_bytes()?;
+        if let Some(reply_dh1) = &reply.dh1 {
+          if reply_dh1.as_ref() != dh1_public_key.as_ref() {
+            return Err(create_security_error_and_log!(
+              "Diffie-Hellman parameter DH1 mismatch on authentication reply"
+            ));
+          }
+        }
+
         // Reconstruct signed data: C2 = Cert2, Perm2, Pdata2, Dsign_algo2, Kagree_algo2
         // Spec: "Sign(Hash(C2) | Challenge2 | DH2 | Challenge1 | DH1 | Hash(C1)) )",
         // see Table 50
@@ -810,7 +823,8 @@ impl Authentication for AuthenticationBuiltin {
             "challenge1",
             Bytes::copy_from_slice(reply.challenge1.as_ref()),
           ),
-          BinaryProperty::with_propagate("dh1", Bytes::copy_from_slice(reply.dh1.as_ref())),
+          // tyrerig patch: our own DH1 (was reply.dh1, which may be absent)
+          BinaryProperty::with_propagate("dh1", Bytes::copy_from_slice(dh1_public_key.as_ref())),
           BinaryProperty::with_propagate("hash_c1", Bytes::copy_from_slice(hash_c1.as_ref())),
         ];
 
@@ -828,14 +842,15 @@ impl Authentication for AuthenticationBuiltin {
         // Verify that the key agreement algo in the reply is as we expect
         let kagree_algo_in_reply = reply.c_kagree_algo;
         let expected_kagree_algo = dh1.kagree_algo_name_str();
-        if kagree_algo_in_reply != expected_kagree_algo {
+        // tyrerig patch: compare without one trailing NUL (see without_trailing_nul)
+        if without_trailing_nul(&kagree_algo_in_reply) != expected_kagree_algo.as_bytes() {
           return Err(create_security_error_and_log!(
             "Unexpected key agreement algorithm: {kagree_algo_in_reply:?} in \
              HandshakeReplyMessageToken. Expected {expected_kagree_algo}"
           ));
         }
 
-        let dh1_public_key = dh1.public_key_bytes()?;
+        // tyrerig patch: dh1_public_key is now computed before the signature check
 
         // Compute the shared secret
         let shared_secret = dh1.compute_shared_secret(reply.dh2.clone())?;
@@ -941,7 +956,12 @@ impl Authentication for AuthenticationBuiltin {
         }
 
         // sanity check
-        if dh1_public != final_token.dh1 {
+        // tyrerig patch: only when the final message has dh1 (optional)
+        if final_token
+          .dh1
+          .as_ref()
+          .is_some_and(|dh1| *dh1 != dh1_public)
+        {
           return Err(create_security_error_and_log!(
             "Diffie-Hellman parameter DH1 mismatch on authentication final receive"
           ));
@@ -949,7 +969,12 @@ impl Authentication for AuthenticationBuiltin {
 
         // sanity check
         let dh2_public_key = dh2.public_key_bytes()?;
-        if dh2_public_key.as_ref() != final_token.dh2.as_ref() {
+        // tyrerig patch: only when the final message has dh2 (optional)
+        if final_token
+          .dh2
+          .as_ref()
+          .is_some_and(|dh2| dh2.as_ref() != dh2_public_key.as_ref())
+        {
           return Err(create_security_error_and_log!(
             "Diffie-Hellman parameter DH2 mismatch on authentication final receive"
           ));

@@ -303,12 +303,21 @@ pub const ECDH_KAGREE_ALGO_NAME: &str = "ECDH+prime256v1-CEUM";
 pub const RSA_SIGNATURE_ALGO_NAME: &[u8] = b"RSASSA-PSS-SHA256";
 pub const ECDSA_SIGNATURE_ALGO_NAME: &[u8] = b"ECDSA-SHA256";
 
+// tyrerig patch: string-valued handshake properties (c.dsign_algo,
+// c.kagree_algo) may arrive with the C string's terminating NUL: Cyclone DDS
+// 0.10 sends e.g. b"ECDH+prime256v1-CEUM\0". Compare names without one
+// trailing NUL; hashes and signatures keep using the bytes as received.
+pub(in crate::security) fn without_trailing_nul(value: &[u8]) -> &[u8] {
+  value.strip_suffix(&[0]).unwrap_or(value)
+}
+
 // Recognize standard string constatns and convert to
 // corresponging algorithm identifiers in ring library.
 pub(crate) fn parse_signature_algo_name_to_ring(
   algo_name: &[u8],
 ) -> SecurityResult<&'static dyn ring::signature::VerificationAlgorithm> {
-  match algo_name {
+  // tyrerig patch: tolerate one trailing NUL (see without_trailing_nul)
+  match without_trailing_nul(algo_name) {
     RSA_SIGNATURE_ALGO_NAME => Ok(&ring::signature::RSA_PSS_2048_8192_SHA256),
     ECDSA_SIGNATURE_ALGO_NAME => Ok(&ring::signature::ECDSA_P256_SHA256_ASN1),
     _other =>
@@ -423,9 +432,10 @@ impl BuiltinHandshakeMessageToken {
       .challenge2
       .ok_or_else(|| create_security_error_and_log!("challenge2 not found"))
       .and_then(|b| Challenge::try_from(b.as_ref()))?;
-    let dh1 = self
-      .dh1
-      .ok_or_else(|| create_security_error_and_log!("dh1 not found"))?;
+    // tyrerig patch: dh1 is optional in a reply (DDS Security 1.1 Table 50: it
+    // echoes the requester's own DH1, which the requester has anyway); Cyclone
+    // DDS 0.10 leaves it out. The caller checks it against its own when present.
+    let dh1 = self.dh1;
     let dh2 = self
       .dh2
       .ok_or_else(|| create_security_error_and_log!("dh2 not found"))?;
@@ -468,12 +478,11 @@ impl BuiltinHandshakeMessageToken {
       .challenge2
       .ok_or_else(|| create_security_error_and_log!("challenge2 not found"))
       .and_then(|b| Challenge::try_from(b.as_ref()))?;
-    let dh1 = self
-      .dh1
-      .ok_or_else(|| create_security_error_and_log!("dh1 not found"))?;
-    let dh2 = self
-      .dh2
-      .ok_or_else(|| create_security_error_and_log!("dh2 not found"))?;
+    // tyrerig patch: dh1 and dh2 are optional in a final message (DDS Security 1.1
+    // Table 51: both echo what the replier has); Cyclone DDS 0.10 leaves dh1 out.
+    // The caller checks them against its own when present.
+    let dh1 = self.dh1;
+    let dh2 = self.dh2;
     let signature = self
       .signature
       .ok_or_else(|| create_security_error_and_log!("signature not found"))?;
@@ -515,7 +524,7 @@ pub(in crate::security) struct HandshakeReply {
   pub hash_c2: Option<Sha256>,
   pub challenge1: Challenge,
   pub challenge2: Challenge,
-  pub dh1: Bytes,
+  pub dh1: Option<Bytes>, // tyrerig patch: optional (was Bytes), see extract_reply
   pub dh2: Bytes,
   pub signature: Bytes,
 }
@@ -526,8 +535,8 @@ pub(in crate::security) struct HandshakeFinal {
   pub hash_c2: Option<Sha256>,
   pub challenge1: Challenge,
   pub challenge2: Challenge,
-  pub dh1: Bytes,
-  pub dh2: Bytes,
+  pub dh1: Option<Bytes>, // tyrerig patch: optional (was Bytes), see extract_final
+  pub dh2: Option<Bytes>, // tyrerig patch: optional (was Bytes), see extract_final
   pub signature: Bytes,
 }
 

@@ -37,6 +37,20 @@ impl CryptoKeyExchange for CryptographicBuiltin {
     self
       .get_receiver_specific_encode_key_materials(&remote_datareader_crypto_handle)
       .cloned()
+      // tyrerig patch: a payload key material of kind NONE (submessage protected,
+      // payload not) is not sent: one token, as Cyclone DDS sends it. Cyclone refuses
+      // a NONE token for an endpoint whose protection kind is not NONE ("Invalid
+      // Crypto token"). A reader only decodes payloads its attributes say are
+      // protected, so the second token was never used for NONE.
+      .map(|key_materials| match key_materials {
+        KeyMaterial_AES_GCM_GMAC_seq::Two(key_material, payload_key_material)
+          if payload_key_material.transformation_kind
+            == BuiltinCryptoTransformationKind::CRYPTO_TRANSFORMATION_KIND_NONE =>
+        {
+          KeyMaterial_AES_GCM_GMAC_seq::One(key_material)
+        }
+        other => other,
+      })
       // Convert to CryptoTokens
       .and_then(Vec::<DatawriterCryptoToken>::try_from)
   }
