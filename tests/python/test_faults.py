@@ -260,13 +260,11 @@ def last_setpoint_is_zero_slip(suite: Suite, t0: float) -> None:
     assert after[-1].slip_angle_deg == 0.0 and after[-1].slip_ratio == 0.0, after[-1]
 
 
-@pytest.mark.xfail(strict=False, reason=(
-    "RustDDS 0.15.1: a stopped-and-continued process's poll returns EINTR (Linux does so for "
-    "epoll_wait after SIGSTOP/SIGCONT even without a handler) and the participant's event loop "
-    "exits ('dp_event_loop poll failed: Interrupted system call'), so the continued rig sends "
-    "nothing more; the detection and the hold (asserted before SIGCONT) work, the resume cannot "
-    "(docs/reliability.md, Known limits)"))
 def test_rig_stopped_2s_is_held_safe_and_the_sweep_reruns(suite):
+    """The rig process stopped for 2 s (SIGSTOP) is detected and held at zero slip; continued
+    (SIGCONT), it talks DDS again and the interrupted sweep reruns. Linux fails `epoll_wait` with
+    EINTR after a stop even with no handler; the vendored RustDDS polls again instead of ending
+    its participant's event loop (vendor/rustdds/PATCHES.md, patch 1)."""
     _, st = in_sweep(suite)
     time.sleep(0.3)
     suite.room.poll()
@@ -286,6 +284,13 @@ def test_rig_stopped_2s_is_held_safe_and_the_sweep_reruns(suite):
     assert rerun.sweep_index <= k, f"resumed at sweep {rerun.sweep_index}, interrupted at {k}"
     time.sleep(1.0)
     out = suite.close()
+    # Every DDS thread of the continued rig survived: RustDDS logs the failed poll as it ends a
+    # loop ('dp_event_loop poll failed' or, for discovery, 'Failed in waiting of poll', both with
+    # 'Interrupted system call'). The discovery thread, idle in epoll_wait, meets EINTR in nearly
+    # every run; whether the busy event loop does depends on timing, so the resume alone passed
+    # unpatched on a loaded machine (vendor/rustdds/PATCHES.md).
+    eintr = [line for line in strip_ansi(out).splitlines() if "Interrupted system call" in line]
+    assert not eintr, f"a DDS poll loop ended on EINTR: {eintr}"
     seqs = sample_seqs(suite.tmp / "run.mcap")
     assert gaps(seqs) == 0, "samples lost while the rig was stopped"
     assert t_alarm - t0 < 1.0, f"alarm after {t_alarm - t0:.3f} s"
