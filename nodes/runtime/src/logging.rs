@@ -10,9 +10,11 @@ use tracing_subscriber::{EnvFilter, fmt};
 /// they report library behaviour, not faults: `dds::pubsub` logs a closed event loop at ERROR on
 /// every clean shutdown, and `discovery::discovery_db` logs a "type inconsistency" on `/clock`
 /// because ros2-client 0.12's spinner declares `/clock` as `builtin_interfaces/Time` where ROS 2
-/// (and our virtual rig) use `rosgraph_msgs/Clock` (same CDR layout, different type name).
-pub const DEFAULT_FILTER: &str =
-    "info,rustdds=error,rustdds::dds::pubsub=off,rustdds::discovery::discovery_db=off,ros2_client=error,mio=error";
+/// (and our virtual rig) use `rosgraph_msgs/Clock` (same CDR layout, different type name). The
+/// RTPS writer's warnings are on: among them, that a reader stopped acknowledging and the writer
+/// no longer waits for it (vendor/rustdds/PATCHES.md, patch 3), and QoS mismatches.
+pub const DEFAULT_FILTER: &str = "info,rustdds=error,rustdds::rtps::writer=warn,rustdds::dds::pubsub=off,\
+     rustdds::discovery::discovery_db=off,ros2_client=error,mio=error";
 
 /// Installs the global subscriber (idempotent: a second call is a no-op). Logs go to stderr so
 /// that stdout stays free for a command's real output (tables, JSON).

@@ -78,6 +78,9 @@ pub struct DomainParticipantBuilder {
 
   same_host_loopback: bool, // prefer loopback for same-host peers + localhost SPDP discovery peers
 
+  // tyrerig patch (PATCHES.md 3): see `reader_inactive_after`.
+  reader_inactive_after: Option<std::time::Duration>,
+
   socket_receive_buffer_size: usize,
   socket_send_buffer_size: usize,
 
@@ -93,6 +96,7 @@ impl DomainParticipantBuilder {
       domain_id,
       only_networks: None,
       same_host_loopback: true,
+      reader_inactive_after: Some(READER_INACTIVE_AFTER_DEFAULT),
       socket_receive_buffer_size: Self::DEFAULT_SOCKET_RECEIVE_BUFFER_SIZE,
       socket_send_buffer_size: Self::DEFAULT_SOCKET_SEND_BUFFER_SIZE,
       #[cfg(feature = "security")]
@@ -126,6 +130,25 @@ impl DomainParticipantBuilder {
   /// `src/rtps/loopback_same_host_design.md`.
   pub fn same_host_loopback(mut self, enabled: bool) -> Self {
     self.same_host_loopback = enabled;
+    self
+  }
+
+  /// How long a matched reliable reader may leave samples unacknowledged,
+  /// sending no ACKNACK at all, before this participant's user writers stop
+  /// waiting for it (default: 2 s; `None`: always wait).
+  ///
+  /// A reader that dies without leaving (its process killed) stays matched
+  /// until its participant's lease ends. Without this, a reliable writer's
+  /// send window fills with samples only the dead reader has not acknowledged,
+  /// and every write then blocks or fails for every reader. An inactive reader
+  /// still gets data, heartbeats and repairs, and the samples it has not
+  /// acknowledged stay in the history (up to the writer's resource limit); it
+  /// holds the send window and `wait_for_acknowledgments` again once its
+  /// ACKNACKs have caught up with the other readers'. This is the RTPS
+  /// ReaderProxy's `isActive` attribute.
+  // tyrerig patch (PATCHES.md 3)
+  pub fn reader_inactive_after(mut self, after: Option<std::time::Duration>) -> Self {
+    self.reader_inactive_after = after;
     self
   }
 
@@ -344,6 +367,7 @@ impl DomainParticipantBuilder {
       self.socket_send_buffer_size,
       self.only_networks,
       self.same_host_loopback,
+      self.reader_inactive_after,
       dp_waker,
       discovery_sample_sender,
     )?;
@@ -977,6 +1001,7 @@ impl DomainParticipantDisc {
     socket_send_buffer_size: usize,
     only_networks: Option<Vec<IpAddr>>,
     same_host_loopback: bool,
+    reader_inactive_after: Option<std::time::Duration>,
     dp_waker: LoopWaker,
     discovery_sample_sender: ReadySender<mio1::Token>,
   ) -> CreateResult<Self> {
@@ -994,6 +1019,7 @@ impl DomainParticipantDisc {
       socket_send_buffer_size,
       only_networks,
       same_host_loopback,
+      reader_inactive_after,
       dp_waker,
       discovery_sample_sender,
     )?;
@@ -1236,6 +1262,7 @@ impl DomainParticipantInner {
     socket_send_buffer_size: usize,
     only_networks: Option<Vec<IpAddr>>,
     same_host_loopback: bool,
+    reader_inactive_after: Option<std::time::Duration>,
     dp_waker: LoopWaker,
     discovery_sample_sender: ReadySender<mio1::Token>,
   ) -> CreateResult<Self> {
@@ -1412,6 +1439,7 @@ impl DomainParticipantInner {
           only_networks_for_ev_loop,
           socket_send_buffer_size,
           same_host_loopback,
+          reader_inactive_after,
           reader_ready_rx,
           writer_ready_rx,
           dp_waker,

@@ -52,6 +52,16 @@ pub const HEARTBEAT_PERIOD_SLOW: crate::structure::duration::Duration =
 pub const HEARTBEAT_PERIOD_FAST: crate::structure::duration::Duration =
   crate::structure::duration::Duration::from_millis(100);
 
+// tyrerig patch: how long a matched reliable reader may leave data
+// unacknowledged without sending any ACKNACK before a (user) Writer stops
+// waiting for it (RTPS ReaderProxy `is_active`, PATCHES.md 3). Twenty fast
+// heartbeat periods: a live reader answers every non-final HEARTBEAT within
+// a round trip. It is well inside the time a full-rate writer takes to fill
+// its send window (DEFAULT_WRITER_MAX_SAMPLES = 8192 samples: 8 s at 1 kHz,
+// so up to ~4 kHz a dead reader costs the others nothing). Configurable per
+// participant with `DomainParticipantBuilder::reader_inactive_after`.
+pub const READER_INACTIVE_AFTER_DEFAULT: Duration = Duration::from_secs(2);
+
 // Fallback upper bound on the number of CacheChanges a Writer retains in its
 // history when the Writer QoS does not specify ResourceLimits.max_samples. This
 // is only a memory-safety backstop: for reliable Writers, samples that matched

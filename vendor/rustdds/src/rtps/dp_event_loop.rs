@@ -140,6 +140,10 @@ pub struct DPEventLoop {
   // route same-host peers over loopback. See
   // `src/rtps/loopback_same_host_design.md`.
   same_host_loopback: bool,
+
+  // tyrerig patch: participant-builder `reader_inactive_after` knob, handed
+  // to every Writer (PATCHES.md 3).
+  reader_inactive_after: Option<std::time::Duration>,
 }
 
 impl DPEventLoop {
@@ -164,6 +168,7 @@ impl DPEventLoop {
     only_networks: Option<Arc<[IpAddr]>>,
     socket_send_buffer_size: usize,
     same_host_loopback: bool,
+    reader_inactive_after: Option<std::time::Duration>,
     reader_ready: ReadyReceiver<EntityId>,
     writer_ready: ReadyReceiver<EntityId>,
     waker: LoopWaker,
@@ -257,6 +262,7 @@ impl DPEventLoop {
       participant_status_sender,
       discovery_command_sender,
       same_host_loopback,
+      reader_inactive_after,
     })
   }
 
@@ -1121,6 +1127,7 @@ impl DPEventLoop {
     // - every writer may route a confirmed same-host peer over loopback.
     // See `src/rtps/loopback_same_host_design.md`.
     new_writer.set_prefer_loopback_same_host(self.same_host_loopback);
+    new_writer.set_reader_inactive_after(self.reader_inactive_after);
     if self.same_host_loopback
       && new_writer.guid().entity_id == EntityId::SPDP_BUILTIN_PARTICIPANT_WRITER
     {
@@ -1352,6 +1359,7 @@ mod tests {
         None,
         0,
         true,
+        Some(READER_INACTIVE_AFTER_DEFAULT),
         reader_ready,
         writer_ready,
         waker,

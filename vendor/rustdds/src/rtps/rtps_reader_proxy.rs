@@ -55,7 +55,15 @@ pub(crate) struct RtpsReaderProxy {
   /// sent along with any data.
   expects_in_line_qos: bool,
   /// Specifies whether the remote Reader is responsive to the Writer
+  // tyrerig patch: a reliable reader that stops acknowledging is made inactive
+  // by the Writer (`Writer::check_reader_activity`, PATCHES.md 3). An inactive
+  // reader still gets data and repairs, but no longer holds the Writer's send
+  // window; it becomes active again once its ACKNACKs catch up.
   is_active: bool,
+  // tyrerig patch: when the Writer last knew this reader to be fine: its last
+  // ACKNACK, or a heartbeat tick at which it owed the reader nothing. `None`
+  // until the Writer matched it.
+  pub last_heard: Option<std::time::Instant>,
 
   // Reader has positively acked all SequenceNumbers _before_ this.
   // This is directly the same as readerSNState.base in ACKNACK submessage.
@@ -107,6 +115,7 @@ impl RtpsReaderProxy {
       loopback_unicast_locators: Vec::default(),
       expects_in_line_qos,
       is_active: true,
+      last_heard: None,
       all_acked_before: SequenceNumber::zero(),
       unsent_changes: BTreeSet::new(),
       pending_gap: BTreeSet::new(),
@@ -236,6 +245,7 @@ impl RtpsReaderProxy {
       loopback_unicast_locators: Vec::new(),
       expects_in_line_qos: false,
       is_active: true,
+      last_heard: None,
       all_acked_before: SequenceNumber::zero(),
       unsent_changes: BTreeSet::new(),
       pending_gap: BTreeSet::new(),
@@ -314,6 +324,7 @@ impl RtpsReaderProxy {
       loopback_unicast_locators,
       expects_in_line_qos: discovered_reader_data.reader_proxy.expects_inline_qos,
       is_active: true,
+      last_heard: None,
       all_acked_before: SequenceNumber::zero(),
       unsent_changes: BTreeSet::new(),
       pending_gap: BTreeSet::new(),
@@ -547,6 +558,16 @@ impl RtpsReaderProxy {
 
   pub fn acked_up_to_before(&self) -> SequenceNumber {
     self.all_acked_before
+  }
+
+  // tyrerig patch: see `is_active`.
+  pub fn is_active(&self) -> bool {
+    self.is_active
+  }
+
+  // tyrerig patch: see `is_active`.
+  pub fn set_active(&mut self, active: bool) {
+    self.is_active = active;
   }
 
   // Fragment handling

@@ -30,8 +30,8 @@ use crate::{
     constant::{
       DEFAULT_WRITER_MAX_SAMPLES, FALLBACK_MAX_AGGREGATED_DATAGRAM_SIZE, FRAGMENT_SIZE,
       HEARTBEAT_PERIOD_FAST, HEARTBEAT_PERIOD_SLOW, HEARTBEAT_SUBMESSAGE_SERIALIZED_SIZE,
-      NACK_RESPONSE_DELAY, NACK_SUPPRESSION_DURATION, REPAIR_BATCH_MAX_BYTES,
-      REPAIR_INTERVAL_DEFAULT, REPAIR_INTERVAL_MAX, REPAIR_INTERVAL_MIN,
+      NACK_RESPONSE_DELAY, NACK_SUPPRESSION_DURATION, READER_INACTIVE_AFTER_DEFAULT,
+      REPAIR_BATCH_MAX_BYTES, REPAIR_INTERVAL_DEFAULT, REPAIR_INTERVAL_MAX, REPAIR_INTERVAL_MIN,
     },
     outbound::{SocketId, TrafficClass},
     rtps_reader_proxy::RtpsReaderProxy,
@@ -205,6 +205,14 @@ pub(crate) struct Writer {
   // default. Passed into `DefaultRouteSelector` on every route resolution.
   prefer_loopback_same_host: bool,
 
+  // tyrerig patch: a matched reliable reader that leaves data unacknowledged
+  // and sends no ACKNACK for this long is made inactive: it no longer holds
+  // the send window (nor `wait_for_acknowledgments`) until it catches up.
+  // `None` = wait for every matched reader (RustDDS 0.15.1's behaviour).
+  // Mirrors the participant-builder `reader_inactive_after` knob. User
+  // writers only: built-in writers never block on their readers anyway.
+  reader_inactive_after: Option<std::time::Duration>,
+
   // Interface-aware transmit: per-remote observed receive interfaces/addresses,
   // shared (intra-thread) with the MessageReceiver that records them. Consulted
   // when (re)resolving each reader proxy's SendRoute.
@@ -349,6 +357,7 @@ impl Writer {
       udp_sender,
       extra_unicast_destinations: Vec::new(),
       prefer_loopback_same_host: true,
+      reader_inactive_after: Some(READER_INACTIVE_AFTER_DEFAULT),
       interface_observations,
       local_interfaces,
       min_datagram_payload: FALLBACK_MAX_AGGREGATED_DATAGRAM_SIZE,
@@ -1072,6 +1081,12 @@ impl Writer {
     let first_change = self.send_buffer.first_change_sequence_number();
     let last_change = self.send_buffer.last_change_sequence_number();
 
+    // tyrerig patch: a reader that stopped acknowledging stops holding the
+    // send window.
+    if self.check_reader_activity(last_change) {
+      self.refresh_acked_frontier();
+    }
+
     if self
       .readers
       .values()
@@ -1180,6 +1195,18 @@ impl Writer {
 
         let my_topic = self.my_topic_name.clone(); // for debugging
 
+        // tyrerig patch: what the other active reliable readers have
+        // acknowledged, for an inactive reader that acknowledges again.
+        let others_frontier = if self
+          .readers
+          .get(&reader_guid)
+          .is_some_and(|rp| !rp.is_active())
+        {
+          self.active_acked_frontier(Some(reader_guid))
+        } else {
+          None
+        };
+
         let mut start_repair = false;
 
         if let Some(reader_proxy) = self.lookup_reader_proxy_mut(reader_guid) {
@@ -1198,6 +1225,26 @@ impl Writer {
 
           //TODO: We should drop SNs in "pending gap" from unsent changes
           reader_proxy.handle_ack_nack(ack_submessage, last_seq);
+
+          // tyrerig patch: the reader is alive. An inactive one holds the
+          // send window again once it no longer holds back the frontier.
+          reader_proxy.last_heard = Some(std::time::Instant::now());
+          if !reader_proxy.is_active() {
+            if reader_proxy.all_acked_before >= others_frontier.unwrap_or(last_seq.plus_1()) {
+              reader_proxy.set_active(true);
+              info!(
+                "Reader {:?} acknowledges again and has caught up (all before {:?}): the \
+                 writer waits for it again. topic={:?}",
+                reader_guid, reader_proxy.all_acked_before, my_topic
+              );
+            } else {
+              debug!(
+                "Inactive reader {:?} acknowledges all before {:?}, the others {:?}: still \
+                 catching up. topic={:?}",
+                reader_guid, reader_proxy.all_acked_before, others_frontier, my_topic
+              );
+            }
+          }
 
           // Sanity Check: if the reader asked for something we did not even advertise
           // yet. TODO: This
@@ -1340,13 +1387,73 @@ impl Writer {
       self.send_buffer.set_acked_frontier(None);
       return;
     }
-    let frontier = self
+    // tyrerig patch: inactive readers do not hold the window.
+    let frontier = self.active_acked_frontier(None);
+    self.send_buffer.set_acked_frontier(frontier);
+  }
+
+  // tyrerig patch: the smallest `all_acked_before` over the matched reliable
+  // readers that are active, leaving out `except`; `None` if there is none.
+  fn active_acked_frontier(&self, except: Option<GUID>) -> Option<SequenceNumber> {
+    self
       .readers
       .values()
-      .filter(|rp| rp.qos().is_reliable())
+      .filter(|rp| rp.qos().is_reliable() && rp.is_active())
+      .filter(|rp| Some(rp.remote_reader_guid) != except)
       .map(RtpsReaderProxy::acked_up_to_before)
-      .min();
-    self.send_buffer.set_acked_frontier(frontier);
+      .min()
+  }
+
+  // tyrerig patch (PATCHES.md 3): called at every heartbeat tick. A reliable
+  // reader that has data unacknowledged and has sent no ACKNACK for
+  // `reader_inactive_after` is made inactive, so that a reader that died
+  // without leaving (its participant's lease has not yet run out) does not
+  // hold the send window full for every other reader. Its samples stay in the
+  // history as before (cache cleaning still keeps what it has not
+  // acknowledged, up to the resource limit), heartbeats still go to it, and
+  // its ACKNACKs are still served; see `handle_ack_nack` for how it becomes
+  // active again. Returns whether a reader was made inactive.
+  fn check_reader_activity(&mut self, last_change: SequenceNumber) -> bool {
+    let Some(after) = self.reader_inactive_after else {
+      return false;
+    };
+    if self.like_stateless || !self.is_reliable() || self.my_guid.entity_id.kind().is_built_in() {
+      return false;
+    }
+    let now = std::time::Instant::now();
+    let mut changed = false;
+    for rp in self.readers.values_mut() {
+      if !rp.qos().is_reliable() || !rp.is_active() {
+        continue;
+      }
+      if last_change < rp.all_acked_before {
+        // Owed nothing: silence is fine.
+        rp.last_heard = Some(now);
+        continue;
+      }
+      let heard = *rp.last_heard.get_or_insert(now);
+      let silent = now.saturating_duration_since(heard);
+      if silent >= after {
+        rp.set_active(false);
+        changed = true;
+        warn!(
+          "Reader {:?} has sent no ACKNACK for {:.1} s with samples {:?}..={:?} \
+           unacknowledged: the writer no longer waits for it (until it catches up). topic={:?}",
+          rp.remote_reader_guid,
+          silent.as_secs_f64(),
+          rp.all_acked_before,
+          last_change,
+          self.my_topic_name
+        );
+      }
+    }
+    changed
+  }
+
+  /// tyrerig patch: see `reader_inactive_after`. Mirrors the participant-
+  /// builder `reader_inactive_after` knob.
+  pub fn set_reader_inactive_after(&mut self, after: Option<std::time::Duration>) {
+    self.reader_inactive_after = after;
   }
 
   // Send out missing data
@@ -2109,6 +2216,8 @@ impl Writer {
           &selector,
         );
         new_proxy.resolve_path_mtu(&self.local_interfaces);
+        // tyrerig patch: a new reader's silence counts from its match.
+        new_proxy.last_heard = Some(std::time::Instant::now());
         new_proxy
       });
     // A reader was added or its locators changed: refresh the writer-wide
