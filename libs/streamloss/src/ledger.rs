@@ -97,9 +97,24 @@ impl LossLedger {
         e.malformed
     }
 
-    /// Messages lost on every stream so far (both sources).
+    /// `writer` says it made every message of `topic` up to sequence number `upto` (by
+    /// `source`): see [`SeqTracker::claim`]. Returns the stream's tail after the claim (0 for a
+    /// writer this ledger has not seen a message from).
+    pub fn claim(&mut self, topic: &str, writer: u128, source: SeqSource, upto: u64) -> u64 {
+        match self.topics.get_mut(topic).and_then(|e| e.streams.get_mut(&(writer, source))) {
+            Some(t) => {
+                t.claim(upto);
+                t.tail()
+            }
+            None => 0,
+        }
+    }
+
+    /// Messages lost on every stream so far (both sources): gaps, and tails (what writers say
+    /// they made after the last message received).
     pub fn lost_total(&self) -> u64 {
-        self.lost_total
+        let tails = self.topics.values().flat_map(|e| e.streams.values()).map(SeqTracker::tail);
+        tails.fold(self.lost_total, u64::saturating_add)
     }
 
     /// Malformed messages so far.
@@ -132,6 +147,7 @@ impl LossLedger {
                     last_seq: t.last_seq().unwrap_or(0),
                     gaps: t.gaps().to_vec(),
                     gaps_total: t.gaps_total(),
+                    tail: t.tail(),
                 });
             }
         }
@@ -167,6 +183,22 @@ mod tests {
         let r = l.report(true);
         assert_eq!(r.streams.len(), MAX_WRITERS_PER_TOPIC + 1);
         assert!(r.streams.iter().any(|s| s.writer == 0));
+    }
+
+    #[test]
+    fn a_tail_counts_as_loss_until_the_stream_goes_on() {
+        let mut l = LossLedger::new();
+        assert_eq!(l.claim("/rig/sample", 1, SeqSource::Message, 9), 0, "no message seen: nothing owed");
+        for s in 0..5 {
+            l.observe("/rig/sample", 1, SeqSource::Message, s);
+        }
+        assert_eq!(l.claim("/rig/sample", 1, SeqSource::Message, 9), 5);
+        assert_eq!(l.lost_total(), 5);
+        let r = l.report(true);
+        assert_eq!((r.streams[0].tail, r.lost_total()), (5, 5));
+        assert!(!r.is_clean());
+        l.observe("/rig/sample", 1, SeqSource::Message, 12);
+        assert_eq!(l.lost_total(), 7, "the tail became a gap of 7 (5-11)");
     }
 
     #[test]

@@ -3,9 +3,11 @@
 //! The record (MCAP metadata named [`LOSS_RECORD`]) holds, for every stream,
 //! `"<topic> <source> <writer> <field>" = value`:
 //! `received`, `lost`, `late`, `first_seq`, `last_seq`, `gaps` (the first ranges,
-//! `"12-15 40"`) and `gaps_total`; and per topic `"<topic> malformed"`. Topic names never hold a
-//! space, so the key splits unambiguously. `complete = true` marks the final count; a log whose
-//! recorder was killed keeps the last interim record (`complete = false`).
+//! `"12-15 40"`), `gaps_total` and `tail` (what the writer says it made after the last message
+//! received: a stream that stopped early); and per topic `"<topic> malformed"`. Topic names never
+//! hold a space, so the key splits unambiguously. `complete = true` marks the final count; a log
+//! whose recorder was killed keeps the last interim record (`complete = false`). Records of
+//! format 1 (before tails were counted) read with a tail of 0.
 
 use crate::ledger::SeqSource;
 use crate::tracker::Gap;
@@ -13,7 +15,9 @@ use std::collections::BTreeMap;
 
 /// Name of the metadata record holding a log's loss report.
 pub const LOSS_RECORD: &str = "tyrerig.loss";
-const FORMAT: &str = "tyrerig-loss/1";
+const FORMAT: &str = "tyrerig-loss/2";
+/// The format before `tail`; still read.
+const FORMAT_1: &str = "tyrerig-loss/1";
 
 /// One stream's losses.
 #[derive(Debug, Clone, PartialEq, Eq)]
@@ -29,6 +33,9 @@ pub struct StreamLoss {
     /// The first gaps (at most [`crate::tracker::MAX_GAP_RANGES`]).
     pub gaps: Vec<Gap>,
     pub gaps_total: u64,
+    /// Messages the writer says it made after `last_seq` that never arrived (its own count,
+    /// announced beside the stream): lost, though no later message shows a gap.
+    pub tail: u64,
 }
 
 /// What a receiver lost, per stream, and what it could not decode, per topic.
@@ -53,8 +60,11 @@ pub struct TopicLoss {
     pub received: u64,
     pub lost: u64,
     pub gaps: u64,
-    /// Lost by the message's own counter (`RigSample.seq`), where the topic has one.
+    /// Lost by the message's own counter (`RigSample.seq`), where the topic has one; tails
+    /// included.
     pub msg_lost: Option<u64>,
+    /// Of the losses, what writers made after the last message received (tails).
+    pub tail: u64,
     pub malformed: u64,
 }
 
@@ -78,14 +88,16 @@ impl LossReport {
         let mut out: BTreeMap<&str, TopicLoss> = BTreeMap::new();
         for s in &self.streams {
             let t = out.entry(&s.topic).or_insert_with(|| TopicLoss { topic: s.topic.clone(), ..Default::default() });
+            let lost = s.lost.saturating_add(s.tail);
+            t.tail = t.tail.saturating_add(s.tail);
             match s.source {
                 SeqSource::Dds => {
                     t.writers += 1;
                     t.received = t.received.saturating_add(s.received);
-                    t.lost = t.lost.saturating_add(s.lost);
+                    t.lost = t.lost.saturating_add(lost);
                     t.gaps = t.gaps.saturating_add(s.gaps_total);
                 }
-                SeqSource::Message => t.msg_lost = Some(t.msg_lost.unwrap_or(0).saturating_add(s.lost)),
+                SeqSource::Message => t.msg_lost = Some(t.msg_lost.unwrap_or(0).saturating_add(lost)),
             }
         }
         for (topic, n) in &self.malformed {
@@ -105,6 +117,12 @@ impl LossReport {
             let mut line = format!("{}: lost {} of {} in {} gap(s)", t.topic, t.lost, t.received + t.lost, t.gaps);
             if let Some(m) = t.msg_lost {
                 line.push_str(&format!(", {m} missing by the message counter"));
+            }
+            if t.tail > 0 {
+                line.push_str(&format!(
+                    ", {} of them made after the last one received and never arrived (the writer's own count)",
+                    t.tail
+                ));
             }
             if t.malformed > 0 {
                 line.push_str(&format!(", {} malformed message(s) refused", t.malformed));
@@ -132,6 +150,7 @@ impl LossReport {
             m.insert(k("first_seq"), s.first_seq.to_string());
             m.insert(k("last_seq"), s.last_seq.to_string());
             m.insert(k("gaps_total"), s.gaps_total.to_string());
+            m.insert(k("tail"), s.tail.to_string());
             m.insert(k("gaps"), s.gaps.iter().map(ToString::to_string).collect::<Vec<_>>().join(" "));
         }
         for (topic, n) in &self.malformed {
@@ -144,8 +163,8 @@ impl LossReport {
     pub fn from_entries(entries: &BTreeMap<String, String>) -> Result<Self, RecordError> {
         let err = |m: String| RecordError(m);
         match entries.get("format").map(String::as_str) {
-            Some(FORMAT) => {}
-            other => return Err(err(format!("format {other:?}: expected {FORMAT:?}"))),
+            Some(FORMAT | FORMAT_1) => {}
+            other => return Err(err(format!("format {other:?}: expected {FORMAT:?} or {FORMAT_1:?}"))),
         }
         let complete = match entries.get("complete").map(String::as_str) {
             Some("true") => true,
@@ -180,6 +199,7 @@ impl LossReport {
                         last_seq: 0,
                         gaps: Vec::new(),
                         gaps_total: 0,
+                        tail: 0,
                     });
                     match *field {
                         "received" => s.received = number()?,
@@ -188,6 +208,7 @@ impl LossReport {
                         "first_seq" => s.first_seq = number()?,
                         "last_seq" => s.last_seq = number()?,
                         "gaps_total" => s.gaps_total = number()?,
+                        "tail" => s.tail = number()?,
                         "gaps" => s.gaps = parse_gaps(value).map_err(|m| err(format!("{key:?}: {m}")))?,
                         other => return Err(err(format!("{key:?}: unknown field {other:?}"))),
                     }
@@ -251,6 +272,40 @@ mod tests {
         );
         assert!(LossLedger::new().report(true).summary_lines().is_empty());
         assert!(LossLedger::new().report(true).is_clean());
+    }
+
+    #[test]
+    fn a_tail_is_loss_in_the_record_and_the_summary() {
+        let mut l = sample_ledger();
+        l.claim("/rig/sample", 0xabc, SeqSource::Message, 25); // made up to 25, got up to 19
+        let r = l.report(true);
+        let e = r.to_entries();
+        assert_eq!(e[&format!("/rig/sample msg {:032x} tail", 0xabc)], "6");
+        assert_eq!(e[&format!("/rig/sample msg {:032x} lost", 0xabc)], "14", "gaps alone");
+        assert_eq!(e["lost_total"], "20");
+        assert_eq!(LossReport::from_entries(&e), Ok(r.clone()));
+        assert_eq!(
+            r.summary_lines(),
+            ["/rig/sample: lost 14 of 20 in 2 gap(s), 20 missing by the message counter, 6 of them made after the \
+                 last one received and never arrived (the writer's own count), 1 malformed message(s) refused"]
+        );
+        // A stream that lost nothing but its tail is not clean.
+        let mut clean = LossLedger::new();
+        for s in 0..10 {
+            clean.observe("/rig/sample", 1, SeqSource::Message, s);
+        }
+        assert!(clean.report(true).is_clean());
+        clean.claim("/rig/sample", 1, SeqSource::Message, 12);
+        assert!(!clean.report(true).is_clean());
+    }
+
+    #[test]
+    fn format_1_records_still_read() {
+        let r = sample_ledger().report(true);
+        let mut e = r.to_entries();
+        e.insert("format".into(), FORMAT_1.into());
+        e.retain(|k, _| !k.ends_with(" tail"));
+        assert_eq!(LossReport::from_entries(&e), Ok(r));
     }
 
     #[test]

@@ -52,6 +52,9 @@ pub struct SeqTracker {
     late: u64,
     gaps: Vec<Gap>,
     gaps_total: u64,
+    /// The highest sequence number the writer says it made (its own count, e.g. the rig's
+    /// announced `RigSample.seq`), see [`SeqTracker::claim`].
+    claimed: Option<u64>,
 }
 
 impl SeqTracker {
@@ -84,6 +87,31 @@ impl SeqTracker {
             self.gaps.push(gap);
         }
         Observation::Gap(gap)
+    }
+
+    /// The writer says it made every sequence number up to `upto` (its own count, announced
+    /// beside the stream). What it made after the last one received and never arrived is the
+    /// stream's tail ([`SeqTracker::tail`]): a stream that stops early leaves no gap, since no
+    /// later message comes to show one. Claims before the first message seen are ignored (a
+    /// late-joining reader was not owed them); a lower claim than an earlier one changes nothing.
+    pub fn claim(&mut self, upto: u64) {
+        if self.first.is_some() {
+            self.claimed = Some(self.claimed.map_or(upto, |c| c.max(upto)));
+        }
+    }
+
+    /// Messages the writer says it made after the last one received ([`SeqTracker::claim`]);
+    /// 0 once a later message arrives (what is missing before it is then a gap).
+    pub fn tail(&self) -> u64 {
+        match (self.first, self.claimed) {
+            (Some(_), Some(c)) if c > self.last => c - self.last,
+            _ => 0,
+        }
+    }
+
+    /// The writer's highest claim, if any.
+    pub fn claimed(&self) -> Option<u64> {
+        self.claimed
     }
 
     /// First sequence number seen, if any.
@@ -159,6 +187,24 @@ mod tests {
         assert_eq!(t.gaps().len(), MAX_GAP_RANGES);
         assert_eq!(t.gaps_total(), 999);
         assert_eq!(t.lost(), 999);
+    }
+
+    #[test]
+    fn a_claim_beyond_the_last_message_is_a_tail_until_later_ones_come() {
+        let mut t = SeqTracker::new();
+        t.claim(50); // before the first message: not owed to this reader
+        assert_eq!((t.tail(), t.claimed()), (0, None));
+        for s in 10..=20 {
+            t.observe(s);
+        }
+        t.claim(20);
+        assert_eq!(t.tail(), 0, "everything claimed arrived");
+        t.claim(35);
+        t.claim(30); // an older announcement arriving late lowers nothing
+        assert_eq!((t.tail(), t.claimed()), (15, Some(35)));
+        // The stream comes back after a jump: the tail becomes a gap, never counted twice.
+        t.observe(40);
+        assert_eq!((t.tail(), t.lost()), (0, 19));
     }
 
     #[test]

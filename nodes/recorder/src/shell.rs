@@ -7,14 +7,17 @@
 //! go with it to the writer thread, which keeps the [`LossWatch`]. A gap, or a message that does
 //! not decode, is announced on `/diagnostics` at once and written into the log as the
 //! `tyrerig.loss` metadata record (again at most once a second while loss goes on, so a killed
-//! recorder's file still says what it missed, and a final tally on stop). The readers have a deep
-//! history ([`node_runtime::Qos::recording_profile`]) so the recorder keeps up far above any
-//! rig's rate; beyond its ceiling the loss is counted, never hidden.
+//! recorder's file still says what it missed, and a final tally on stop). A stream that stops
+//! early leaves no gap; the rig's own count of what it made (`<node>: published` on
+//! `/diagnostics`, [`WriterTally`]) shows what never arrived, and the loss record counts it as the
+//! stream's tail (`/diagnostics` is subscribed for that even when it is not recorded). The readers
+//! have a deep history ([`node_runtime::Qos::recording_profile`]) so the recorder keeps up far
+//! above any rig's rate; beyond its ceiling the loss is counted, never hidden.
 
 use crate::config::{OnExisting, RecorderConfig, RecorderConfigError};
 use crate::forward::{DRAIN_LIMIT, forward};
 use mcaplog::{LogWriteError, McapLog, McapLogOptions, codec};
-use node_runtime::{LossWatch, RosNode, RuntimeError, Shutdown, SuiteTopic, topics::TopicVisitor};
+use node_runtime::{LossWatch, RosNode, RuntimeError, Shutdown, SuiteTopic, WriterTally, topics::TopicVisitor};
 use ros2_client::{MessageInfo, ros2::ReadError};
 use std::{
     collections::BTreeMap,
@@ -68,6 +71,9 @@ enum Received {
         info: MessageInfo,
         /// `RigSample.seq` for samples.
         message_seq: Option<u64>,
+        /// Writers' own counts (`/diagnostics`), taken before the stop only: what a writer made
+        /// after the recorder stopped listening was not owed to it.
+        tallies: Vec<WriterTally>,
     },
     Refused {
         topic: SuiteTopic,
@@ -126,6 +132,23 @@ impl StreamSilence {
             }
         }
         changes
+    }
+}
+
+/// The `/diagnostics` status of a stream gone silent (or flowing again) after `silent_s`.
+fn silence_status(node_name: &str, topic: &str, silent_s: f64, silent: bool) -> DiagnosticStatus {
+    let message = if silent {
+        format!("{topic}: silent for {silent_s:.1} s while other streams flow (its node stopped?)")
+    } else {
+        format!("{topic}: flowing again after {silent_s:.1} s")
+    };
+    tracing::warn!("{message}");
+    DiagnosticStatus {
+        level: if silent { DiagnosticStatus::ERROR } else { DiagnosticStatus::WARN },
+        name: format!("{node_name}: stream_silent"),
+        message,
+        hardware_id: "dds".into(),
+        values: vec![KeyValue { key: "topic".into(), value: topic.to_owned() }],
     }
 }
 
@@ -199,13 +222,18 @@ pub async fn run(mut node: RosNode, cfg: RecorderConfig, shutdown: Shutdown) -> 
 
     let (tx, mut rx) = mpsc::channel::<Received>(65_536);
     let mut tasks = Vec::new();
-    for &t in &topics {
+    // The rig's count of its samples comes on `/diagnostics`: listened to even when not recorded.
+    let mut subscribed = topics.clone();
+    if topics.contains(&SuiteTopic::RigSample) && !topics.contains(&SuiteTopic::Diagnostics) {
+        subscribed.push(SuiteTopic::Diagnostics);
+    }
+    for &t in &subscribed {
         tasks.push(t.visit(Subscribe { node: &mut node, tx: tx.clone(), shutdown: shutdown.clone() })?);
     }
     drop(tx);
     let diagnostics = node.publisher::<DiagnosticArray>(SuiteTopic::Diagnostics)?;
     let namespace = node.namespace().to_owned();
-    let topic_names: BTreeMap<SuiteTopic, String> = topics.iter().map(|t| (*t, t.full_name(&namespace))).collect();
+    let topic_names: BTreeMap<SuiteTopic, String> = subscribed.iter().map(|t| (*t, t.full_name(&namespace))).collect();
     let mut watch = LossWatch::new(node.name());
     let mut silence = StreamSilence::new(&topics);
     let node_name = node.name().to_owned();
@@ -219,49 +247,44 @@ pub async fn run(mut node: RosNode, cfg: RecorderConfig, shutdown: Shutdown) -> 
         let mut loss_seen = 0u64;
         while let Some(r) = rx.blocking_recv() {
             match r {
-                Received::Message { topic, log_time_ns, publish_time_ns, data, info, message_seq } => {
-                    log.write(channel_ids[&topic], log_time_ns, publish_time_ns, &data)?;
-                    // `/clock` is best effort by ROS convention: dropping a tick is its contract,
-                    // not loss.
-                    if topic.spec().qos != node_runtime::Qos::Clock {
-                        watch.on_message(&topic_names[&topic], &info, message_seq);
+                Received::Message { topic, log_time_ns, publish_time_ns, data, info, message_seq, tallies } => {
+                    let arrived = Instant::now();
+                    for tally in &tallies {
+                        watch.on_tally(tally, arrived);
                     }
-                    if publish_time_ns > 0 {
-                        stamp = Time::from_nanos(publish_time_ns);
-                    }
-                    let changes = silence.on_message(topic, Instant::now());
-                    if !changes.is_empty() {
-                        let status = changes
-                            .into_iter()
-                            .map(|(t, silent_s, silent)| {
-                                let name = &topic_names[&t];
-                                let message = if silent {
-                                    format!("{name}: silent for {silent_s:.1} s while other streams flow (its node stopped?)")
-                                } else {
-                                    format!("{name}: flowing again after {silent_s:.1} s")
-                                };
-                                tracing::warn!("{message}");
-                                DiagnosticStatus {
-                                    level: if silent { DiagnosticStatus::ERROR } else { DiagnosticStatus::WARN },
-                                    name: format!("{node_name}: stream_silent"),
-                                    message,
-                                    hardware_id: "dds".into(),
-                                    values: vec![KeyValue { key: "topic".into(), value: name.clone() }],
-                                }
-                            })
-                            .collect();
-                        let d = DiagnosticArray {
-                            header: tyre_msgs::std_msgs::Header { stamp, frame_id: String::new() },
-                            status,
-                        };
-                        if let Err(e) = diagnostics.publish(d) {
-                            tracing::warn!("/diagnostics publish: {e:?}");
+                    // A topic without a channel is subscribed for the tallies alone.
+                    if let Some(&channel) = channel_ids.get(&topic) {
+                        log.write(channel, log_time_ns, publish_time_ns, &data)?;
+                        // `/clock` is best effort by ROS convention: dropping a tick is its contract,
+                        // not loss.
+                        if topic.spec().qos != node_runtime::Qos::Clock {
+                            watch.on_message(&topic_names[&topic], &info, message_seq);
+                        }
+                        if publish_time_ns > 0 {
+                            stamp = Time::from_nanos(publish_time_ns);
+                        }
+                        let changes = silence.on_message(topic, Instant::now());
+                        if !changes.is_empty() {
+                            let status = changes
+                                .into_iter()
+                                .map(|(t, silent_s, silent)| {
+                                    silence_status(&node_name, &topic_names[&t], silent_s, silent)
+                                })
+                                .collect();
+                            let d = DiagnosticArray {
+                                header: tyre_msgs::std_msgs::Header { stamp, frame_id: String::new() },
+                                status,
+                            };
+                            if let Err(e) = diagnostics.publish(d) {
+                                tracing::warn!("/diagnostics publish: {e:?}");
+                            }
                         }
                     }
                 }
                 Received::Refused { topic, error } => watch.on_read_error(&topic_names[&topic], &error),
             }
             let now = Instant::now();
+            watch.apply_tallies(Some(now));
             if let Some(d) = watch.announcement(now, stamp)
                 && let Err(e) = diagnostics.publish(d)
             {
@@ -278,6 +301,9 @@ pub async fn run(mut node: RosNode, cfg: RecorderConfig, shutdown: Shutdown) -> 
                 loss_seen = seen;
             }
         }
+        // Everything that will arrive has: what the writers said they made before the stop and
+        // is not here is the streams' tails.
+        watch.apply_tallies(None);
         let report = watch.ledger().report(true);
         log.write_metadata(streamloss::LOSS_RECORD, &report.to_entries())?;
         let stats = RecorderStats {
@@ -337,10 +363,24 @@ impl TopicVisitor for Subscribe<'_> {
                 Ok((msg, info)) => {
                     let log_time_ns = now_ns();
                     let message_seq = (&msg as &dyn std::any::Any).downcast_ref::<RigSample>().map(|s| s.seq);
+                    let tallies = match (&msg as &dyn std::any::Any).downcast_ref::<DiagnosticArray>() {
+                        Some(d) if !shutdown.is_triggered() => {
+                            d.status.iter().filter_map(WriterTally::from_status).collect()
+                        }
+                        _ => Vec::new(),
+                    };
                     match codec::encode(&msg, &type_name) {
                         Ok(data) => {
                             let publish_time_ns = codec::leading_stamp(&data).map_or(0, |t| t.as_nanos());
-                            Some(Received::Message { topic, log_time_ns, publish_time_ns, data, info, message_seq })
+                            Some(Received::Message {
+                                topic,
+                                log_time_ns,
+                                publish_time_ns,
+                                data,
+                                info,
+                                message_seq,
+                                tallies,
+                            })
                         }
                         Err(e) => {
                             tracing::error!("{topic:?}: {e}");

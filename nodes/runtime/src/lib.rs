@@ -25,7 +25,7 @@ pub mod shutdown;
 pub mod topics;
 
 pub use config::{RuntimeConfig, RuntimeConfigError};
-pub use loss::LossWatch;
+pub use loss::{LossWatch, WriterTally};
 pub use node::{RosNode, RuntimeError};
 pub use security::{SecurityConfig, SecurityConfigError};
 pub use shutdown::Shutdown;

@@ -4,9 +4,14 @@
 //! sequencer died, or a lockstep answer never came) it holds zero slip at the present load and
 //! speed instead of running on with the last slip it was told. Lost or malformed setpoints are
 //! counted and announced on `/diagnostics` (`node_runtime::LossWatch`).
+//!
+//! Once a wall second, and when it stops, the rig announces its own count of the samples it made
+//! (`<node>: published` on `/diagnostics`, a [`WriterTally`]: the last `RigSample.seq`, how many
+//! its writer took and how many it refused), so a recorder knows what it did not get even when
+//! the stream stops early and no later sample shows a gap.
 
 use futures::StreamExt;
-use node_runtime::{LossWatch, RosNode, RuntimeError, Shutdown, SuiteTopic};
+use node_runtime::{LossWatch, RosNode, RuntimeError, Shutdown, SuiteTopic, WriterTally};
 use rigsim::{RigConfig, VirtualRig};
 use serde::Deserialize;
 use std::{path::PathBuf, time::Duration};
@@ -200,7 +205,10 @@ pub async fn run(mut node: RosNode, cfg: VirtualRigNodeConfig, shutdown: Shutdow
     // waits on its readers: the sample is dropped, and every reader sees the gap in
     // RigSample.seq and reports it.
     let refused = std::sync::atomic::AtomicU64::new(0);
+    let published = std::sync::atomic::AtomicU64::new(0);
+    let last_seq = std::sync::atomic::AtomicU64::new(0);
     let publish = |s: &RigSample| -> Result<(), VirtualRigNodeError> {
+        last_seq.store(s.seq, std::sync::atomic::Ordering::Relaxed);
         if let Err(e) = samples.publish(s.clone()) {
             let n = refused.fetch_add(1, std::sync::atomic::Ordering::Relaxed) + 1;
             if n <= 5 || n.is_multiple_of(1000) {
@@ -211,10 +219,32 @@ pub async fn run(mut node: RosNode, cfg: VirtualRigNodeConfig, shutdown: Shutdow
                     format!("{e:?}").chars().take(60).collect::<String>()
                 );
             }
+        } else {
+            published.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
         }
         let _ = clock.publish(Clock { clock: s.header.stamp });
         Ok(())
     };
+    // The rig's own count of its samples, on `/diagnostics` (see the module docs).
+    let sample_topic = node.topic_name(SuiteTopic::RigSample);
+    let sample_writer = node_runtime::loss::publisher_id(&samples);
+    let announce_tally = |stamp| {
+        let tally = WriterTally {
+            topic: sample_topic.clone(),
+            writer: sample_writer,
+            last_seq: last_seq.load(std::sync::atomic::Ordering::Relaxed),
+            published: published.load(std::sync::atomic::Ordering::Relaxed),
+            refused: refused.load(std::sync::atomic::Ordering::Relaxed),
+        };
+        let d = DiagnosticArray {
+            header: Header { stamp, frame_id: String::new() },
+            status: vec![tally.to_status(&node_name)],
+        };
+        if let Err(e) = diagnostics.publish(d) {
+            tracing::warn!("/diagnostics publish: {e:?}");
+        }
+    };
+    let mut tally_at = std::time::Instant::now();
     let apply = |rig: &mut VirtualRig, sp: &RigSetpoint| {
         if let Err(refusal) = rig.apply_setpoint(sp) {
             tracing::warn!("setpoint refused, rig safe: {refusal}");
@@ -238,6 +268,7 @@ pub async fn run(mut node: RosNode, cfg: VirtualRigNodeConfig, shutdown: Shutdow
     }
     let wall_start = tokio::time::Instant::now();
     let sim_start = rig.time_s();
+    let mut last_stamp = None;
     tracing::info!(clock = ?cfg.clock, time_scale = cfg.time_scale, "virtual rig running");
     loop {
         if shutdown.is_triggered() || cfg.max_sim_time_s.is_some_and(|m| rig.time_s() - sim_start >= m) {
@@ -324,6 +355,17 @@ pub async fn run(mut node: RosNode, cfg: VirtualRigNodeConfig, shutdown: Shutdow
             }
         }
         loss.announce(&diagnostics, t);
+        if tally_at.elapsed() >= TALLY_EVERY {
+            announce_tally(t);
+            tally_at = std::time::Instant::now();
+        }
+        last_stamp = Some(t);
+    }
+    if let Some(t) = last_stamp {
+        announce_tally(t);
     }
     Ok(())
 }
+
+/// How often the rig announces its count of samples (wall time).
+pub const TALLY_EVERY: Duration = Duration::from_secs(1);
