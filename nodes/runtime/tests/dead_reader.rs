@@ -67,6 +67,8 @@ async fn a_killed_reader_costs_the_other_readers_nothing() -> anyhow::Result<()>
     if std::env::var_os(CHILD_ENV).is_some() {
         return Ok(());
     }
+    // RustDDS's writer says when it stops waiting for a reader (and, at info, when it waits again).
+    node_runtime::logging::init();
     let cfg = test_config();
     let mut rig = RosNode::new("test_dead_reader_rig", &cfg)?;
     let mut live = RosNode::new("test_dead_reader_live", &cfg)?;
