@@ -40,9 +40,10 @@ impl Qos {
     pub fn profile(self) -> QosProfile {
         let reliable = Reliability::Reliable { when_full: WhenFull::Wait(Duration::from_millis(200)) };
         // A stream's writer (the rig's samples) never waits more than 1 ms for its send window:
-        // a reader that died without leaving (SIGKILL) holds the window full until its
-        // participant lease ends (~50 s in RustDDS); the sample is then refused, and every
-        // reader sees the gap in its sequence numbers instead of the rig stalling.
+        // a reader far behind (or, before vendor/rustdds patch 3, one that died without leaving
+        // and held the window full until its participant lease ended, ~50 s) makes it full; the
+        // sample is then refused, and every reader sees the gap in its sequence numbers instead
+        // of the rig stalling. Patch 3 stops waiting for a reader silent for 2 s.
         let stream = Reliability::Reliable { when_full: WhenFull::Wait(Duration::from_millis(1)) };
         let base = QosProfile::publisher_default();
         match self {

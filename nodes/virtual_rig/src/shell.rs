@@ -200,8 +200,9 @@ pub async fn run(mut node: RosNode, cfg: VirtualRigNodeConfig, shutdown: Shutdow
         let _ = diagnostics
             .publish(DiagnosticArray { header: Header { stamp, frame_id: String::new() }, status: vec![status] });
     };
-    // A reliable writer whose send window is full (a reader that stopped acknowledging: killed,
-    // stopped, far behind) refuses the sample after at most 1 ms (`Qos::Stream`). The rig never
+    // A reliable writer whose send window is full (a reader far behind; one that stopped
+    // acknowledging altogether, killed or stopped, is no longer waited for after 2 s:
+    // vendor/rustdds patch 3) refuses the sample after at most 1 ms (`Qos::Stream`). The rig never
     // waits on its readers: the sample is dropped, and every reader sees the gap in
     // RigSample.seq and reports it.
     let refused = std::sync::atomic::AtomicU64::new(0);
