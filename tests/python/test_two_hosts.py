@@ -27,8 +27,8 @@ all on one DDS domain, as docs/deployment.md describes.
    rig's writer refusing samples while B's readers hold its send window) made the sequencer
    hold the rig at zero slip within a second, and every hold ended with the samples back and
    the interrupted sweep rerun; B's Foxglove node delivers a rig sample to a WebSocket client.
-   Whether (a) costs samples depends on how fast B catches up (none at a load of 5-8, hundreds
-   to ~2,000 at 7-12 on the 2-core CI machine): measured and printed, not asserted.
+   Whether (a) costs samples depends on how fast B catches up after it (none in a hand run,
+   190-2,200 in five test runs on the 2-core machine): measured and printed, not asserted.
 
 Prints the figures docs/deployment.md quotes (lines starting `TWO HOSTS`).
 """
