@@ -113,6 +113,15 @@ pub struct CandidateScore {
     pub form_corrected: bool,
 }
 
+/// One re-score of the backward check: a named state effect as the last addition.
+#[derive(Debug, Clone, Serialize)]
+pub struct BackwardScore {
+    /// The state effects in the model it was scored against (refitted without it).
+    pub beside: Vec<Effect>,
+    /// Its score there.
+    pub score: CandidateScore,
+}
+
 /// A named effect (or form error) with its evidence and before/after RMS.
 #[derive(Debug, Clone, Serialize)]
 pub struct NamedEffect {
@@ -205,6 +214,9 @@ pub struct Diagnosis {
     /// the state effects named after them in the model they were no longer significant (they
     /// had stood in for one of those).
     pub dropped: Vec<String>,
+    /// The backward check's re-scores: each named state effect scored as the last addition to
+    /// a model holding the other state effects named with it (every pass of the check).
+    pub backward_check: Vec<BackwardScore>,
     /// References of the state variables (thermal reference and range, speed reference).
     pub references: state::References,
     /// Per log, the decay time constant of the laser flash fitted out of the quiet tread
@@ -977,7 +989,13 @@ impl Ctx<'_> {
     /// best single form takes the first round). Each named state effect is scored again as the
     /// last addition to a model holding all the others, refitted without it; while one is not
     /// significant there (and not inseparable from them), the weakest is dropped.
-    fn drop_stand_ins(&self, search: &mut Search, rounds: &[Vec<CandidateScore>], bw: &Bandwidths) -> Vec<String> {
+    fn drop_stand_ins(
+        &self,
+        search: &mut Search,
+        rounds: &[Vec<CandidateScore>],
+        bw: &Bandwidths,
+        checked: &mut Vec<BackwardScore>,
+    ) -> Vec<String> {
         let mut dropped = Vec::new();
         loop {
             let state_named: Vec<Effect> =
@@ -995,6 +1013,8 @@ impl Ctx<'_> {
                 // (at α/m, wear explaining 11.3 % beside thermal, p = 0.007 in 4/4 folds, was
                 // dropped on the brush race tyre where both were hidden).
                 let (score, _) = self.score(&round, e, round.form_error.is_some(), 1);
+                let beside = state_named.iter().copied().filter(|o| *o != e).collect();
+                checked.push(BackwardScore { beside, score: score.clone() });
                 // A stand-in adds about nothing once the others are in (the drops measured on
                 // the benchmark: −1.2 to +3.7 %). A re-score far below zero says the joint refit
                 // cannot separate it from them (brush road tyre, thermal + wear: thermal at
@@ -1231,7 +1251,8 @@ pub fn diagnose(ds: &Dataset, base: &TyreParams, cfg: &DoctorConfig) -> Result<D
         stop_reason = format!("stopped at the limit of {} effects of each family", cfg.max_effects);
     }
     not_identifiable.extend(held_back);
-    let dropped = ctx.drop_stand_ins(&mut search, &rounds, &bandwidths);
+    let mut backward_check = Vec::new();
+    let dropped = ctx.drop_stand_ins(&mut search, &rounds, &bandwidths, &mut backward_check);
     let Round { present, cur_fit, cur_ho, .. } = ctx.round(std::mem::take(&mut search.model), &bandwidths);
     let Search { mut named, plot, .. } = search;
     // Keep each named effect's parameters from the final joint fit.
@@ -1258,6 +1279,7 @@ pub fn diagnose(ds: &Dataset, base: &TyreParams, cfg: &DoctorConfig) -> Result<D
         stop_reason,
         not_identifiable,
         dropped,
+        backward_check,
         references: ctx.ev.references(),
         flash_decay_s: ds.flash_decay_s.clone(),
         not_diagnosed,

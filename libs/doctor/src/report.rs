@@ -91,6 +91,14 @@ pub fn to_json(
         "form_errors": dx.form_errors().map(|n| n.effect.name()).collect::<Vec<_>>(),
         "not_identifiable": dx.not_identifiable,
         "dropped": dx.dropped,
+        "backward_check": dx.backward_check.iter().map(|b| json!({
+            "effect": b.score.effect.name(),
+            "beside": b.beside.iter().map(|e| e.name()).collect::<Vec<_>>(),
+            "evidence": b.score.evidence,
+            "p_value": b.score.p_value,
+            "folds_improved": b.score.folds_improved,
+            "significant": b.score.significant,
+        })).collect::<Vec<_>>(),
         "effects": dx.named.iter().map(|n| json!({
             "effect": n.effect.name(),
             "evidence": n.evidence,
@@ -331,6 +339,27 @@ pub fn markdown(
                 c.folds,
                 c.chi2_before_heldout,
                 c.chi2_after_heldout
+            );
+        }
+        let _ = writeln!(m);
+    }
+    if !dx.backward_check.is_empty() {
+        let _ = writeln!(m, "### Backward check: each state effect as the last addition\n");
+        let _ = writeln!(m, "| effect | beside | evidence | p | folds improved | verdict |");
+        let _ = writeln!(m, "|---|---|---|---|---|---|");
+        for b in &dx.backward_check {
+            let beside: Vec<&str> = b.beside.iter().map(|e| e.name()).collect();
+            let s = &b.score;
+            let verdict = if s.significant { "significant".to_owned() } else { s.reason.clone() };
+            let _ = writeln!(
+                m,
+                "| {} | {} | {:.4} | {:.4} | {}/{} | {verdict} |",
+                s.effect.name(),
+                beside.join(", "),
+                s.evidence,
+                s.p_value,
+                s.folds_improved,
+                s.folds
             );
         }
         let _ = writeln!(m);

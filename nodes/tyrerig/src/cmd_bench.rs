@@ -21,7 +21,8 @@ pub enum BenchCmd {
     /// A rig sample's way through the whole suite: from the rig's write of a sample to the
     /// LiveChannels, the ThermalState and the RigSetpoint computed from it, with every node
     /// running (virtual rig in real time at --rate-hz, thermal, sequencer running FreeRolling,
-    /// quality, recorder), in this process or --processes.
+    /// quality, recorder), in this process or --processes; or, with --attach, a suite already
+    /// running elsewhere (other hosts: docs/deployment.md).
     SuiteLatency {
         #[arg(long, default_value_t = 1000)]
         rate_hz: u32,
@@ -30,6 +31,11 @@ pub enum BenchCmd {
         /// Every node its own OS process (`tyrerig launch --processes`).
         #[arg(long)]
         processes: bool,
+        /// Start no nodes: only the probe, here, on the domain of `ROS_DOMAIN_ID`, timing a suite
+        /// that runs elsewhere (the probe's host and the rig's must share a clock, e.g. by PTP,
+        /// or the figures include their offset).
+        #[arg(long, conflicts_with = "processes")]
+        attach: bool,
         /// launch-config directory (virtual_rig.toml, procedures).
         #[arg(long, default_value = "launch-config")]
         launch_config: std::path::PathBuf,
@@ -169,8 +175,13 @@ pub fn run(cmd: BenchCmd) -> anyhow::Result<()> {
         BenchCmd::Foxglove { clients, rate_hz, seconds, port } => {
             rt.block_on(crate::bench_foxglove::run(clients, rate_hz, seconds, port))
         }
-        BenchCmd::SuiteLatency { rate_hz, seconds, processes, launch_config } => {
-            rt.block_on(suite_latency(rate_hz, seconds, processes, &launch_config))
+        BenchCmd::SuiteLatency { rate_hz, seconds, processes, attach, launch_config } => {
+            let how = match (attach, processes) {
+                (true, _) => SuiteStart::Attach,
+                (false, true) => SuiteStart::Processes,
+                (false, false) => SuiteStart::InProcess,
+            };
+            rt.block_on(suite_latency(rate_hz, seconds, how, &launch_config))
         }
         BenchCmd::DdsLatency { rate_hz, seconds, .. } => rt.block_on(async {
             let mut a = RosNode::new("bench_pub", &cfg)?;
@@ -352,11 +363,24 @@ kind = "quality"
     ))
 }
 
+/// How `bench suite-latency` gets its suite.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+enum SuiteStart {
+    /// Every node a participant of this process.
+    InProcess,
+    /// `tyrerig launch --processes`.
+    Processes,
+    /// Already running elsewhere: only the probe runs here.
+    Attach,
+}
+
 /// Receive times (ns, wall clock) of the messages computed from each sample, keyed by the
 /// sample's stamp (every derived message carries it).
 #[derive(Default)]
 struct Arrivals {
     sample_written_ns: std::collections::HashMap<u64, i64>,
+    /// The samples themselves at the probe: (stamp, arrival).
+    sample_ns: Vec<(u64, i64)>,
     live_ns: Vec<(u64, i64)>,
     thermal_ns: Vec<(u64, i64)>,
     setpoint_ns: Vec<(u64, i64)>,
@@ -365,36 +389,41 @@ struct Arrivals {
 async fn suite_latency(
     rate_hz: u32,
     seconds: f64,
-    processes: bool,
+    how: SuiteStart,
     launch_config: &std::path::Path,
 ) -> anyhow::Result<()> {
     use tyre_msgs::{LiveChannels, RigSetpoint, ThermalState};
     let dir = std::env::temp_dir().join(format!("tyrerig-latency-{}", std::process::id()));
-    std::fs::create_dir_all(&dir)?;
-    let launch_path = dir.join("latency.toml");
-    std::fs::write(&launch_path, latency_launch_file(&dir, rate_hz, launch_config)?)?;
-    let file = crate::launch::LaunchFile::load(&launch_path)?;
     let shutdown = Shutdown::new();
     let mut child = None;
     let mut tasks = tokio::task::JoinSet::new();
-    if processes {
-        let exe = std::env::current_exe().context("cannot find the tyrerig executable")?;
-        child = Some(
-            std::process::Command::new(exe)
-                .arg("launch")
-                .arg(&launch_path)
-                .arg("--processes")
-                .spawn()
-                .context("cannot start the suite")?,
-        );
+    let runtime = if how == SuiteStart::Attach {
+        node_runtime::RuntimeConfig::default()
     } else {
-        for entry in file.nodes.clone() {
-            let (rt_cfg, sd) = (file.runtime.clone(), shutdown.clone());
-            tasks.spawn(async move { crate::launch::run_node(&entry, &rt_cfg, sd).await });
+        std::fs::create_dir_all(&dir)?;
+        let launch_path = dir.join("latency.toml");
+        std::fs::write(&launch_path, latency_launch_file(&dir, rate_hz, launch_config)?)?;
+        let file = crate::launch::LaunchFile::load(&launch_path)?;
+        if how == SuiteStart::Processes {
+            let exe = std::env::current_exe().context("cannot find the tyrerig executable")?;
+            child = Some(
+                std::process::Command::new(exe)
+                    .arg("launch")
+                    .arg(&launch_path)
+                    .arg("--processes")
+                    .spawn()
+                    .context("cannot start the suite")?,
+            );
+        } else {
+            for entry in file.nodes.clone() {
+                let (rt_cfg, sd) = (file.runtime.clone(), shutdown.clone());
+                tasks.spawn(async move { crate::launch::run_node(&entry, &rt_cfg, sd).await });
+            }
         }
-    }
+        file.runtime
+    };
     // The probe: its own participant, like a control room's.
-    let mut probe = RosNode::new("latency_probe", &file.runtime)?;
+    let mut probe = RosNode::new("latency_probe", &runtime)?;
     let samples = probe.subscription::<RigSample>(SuiteTopic::RigSample)?;
     let live = probe.subscription::<LiveChannels>(SuiteTopic::LiveChannels)?;
     let thermal = probe.subscription::<ThermalState>(SuiteTopic::ThermalState)?;
@@ -418,6 +447,7 @@ async fn suite_latency(
                 // When the rig wrote it (DDS source timestamp, same host clock).
                 let written = info.source_timestamp().map_or_else(nanos_now, |t| t.to_nanos());
                 a.sample_written_ns.insert(s.header.stamp.as_nanos(), written);
+                a.sample_ns.push((s.header.stamp.as_nanos(), nanos_now()));
             }
             Some(Ok((m, _))) = l_st.next() => a.live_ns.push((m.header.stamp.as_nanos(), nanos_now())),
             Some(Ok((m, _))) = t_st.next() => a.thermal_ns.push((m.header.stamp.as_nanos(), nanos_now())),
@@ -434,14 +464,17 @@ async fn suite_latency(
     }
     while tasks.join_next().await.is_some() {}
     let n_samples = a.sample_written_ns.len();
-    println!(
-        "suite latency, rig at {rate_hz} Hz in real time, {seconds} s, {}: {n_samples} samples",
-        if processes { "every node its own process" } else { "every node in one process" }
-    );
+    let how = match how {
+        SuiteStart::InProcess => format!("rig at {rate_hz} Hz in real time, every node in one process"),
+        SuiteStart::Processes => format!("rig at {rate_hz} Hz in real time, every node its own process"),
+        SuiteStart::Attach => "a suite running elsewhere".to_owned(),
+    };
+    println!("suite latency, {how}, {seconds} s: {n_samples} samples");
     if n_samples == 0 {
         anyhow::bail!("no rig sample arrived within 60 s");
     }
     for (what, arrivals) in [
+        ("sample -> this probe", &a.sample_ns),
         ("sample -> LiveChannels (quality node)", &a.live_ns),
         ("sample -> ThermalState (thermal node)", &a.thermal_ns),
         ("sample -> RigSetpoint answering it (sequencer)", &a.setpoint_ns),
