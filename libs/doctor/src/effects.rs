@@ -309,13 +309,16 @@ pub struct Evaluator<'a> {
     /// speed for a base fitted to them [m/s].
     pub v_ref_mps: f64,
     /// Severe sliding energy per [`state::BREAK_IN_THRESHOLDS_W`] [J].
-    severe: Vec<Vec<f64>>,
+    severe: std::sync::Arc<Vec<Vec<f64>>>,
     /// Each of [`state::THERMAL_TEMPERATURES`] over the series [°C].
-    lagged_temp: Vec<Vec<f64>>,
+    lagged_temp: std::sync::Arc<Vec<Vec<f64>>>,
     /// The last relaxed slip series by transient parameters: a named transient held fixed is
     /// evaluated again with every prediction, and its recursion runs over every full-rate
     /// sample.
-    relaxed_cache: std::sync::Mutex<Vec<RelaxedEntry>>,
+    relaxed_cache: std::sync::Arc<std::sync::Mutex<Vec<RelaxedEntry>>>,
+    /// A state effect whose state acts with the operating point's share taken out
+    /// ([`crate::form::PartialOut`]): its basis values are z − E[z | x] at every point.
+    partial_out: Option<(Effect, std::sync::Arc<crate::form::PartialOut>)>,
 }
 
 type RelaxedEntry = (Vec<f64>, std::sync::Arc<(Vec<f64>, Vec<f64>)>);
@@ -345,7 +348,41 @@ impl<'a> Evaluator<'a> {
             .map(|&(source, tau)| state::lagged(&s.t_s, Self::temp_source(ds, source), &s.new_tyre, tau))
             .collect();
         let v_ref_mps = if base.longvl_mps() > 0.0 { base.longvl_mps() } else { 16.6 };
-        Self { ds, base, t_ref_c, v_ref_mps, severe, lagged_temp, relaxed_cache: std::sync::Mutex::new(Vec::new()) }
+        Self {
+            ds,
+            base,
+            t_ref_c,
+            v_ref_mps,
+            severe: std::sync::Arc::new(severe),
+            lagged_temp: std::sync::Arc::new(lagged_temp),
+            relaxed_cache: Default::default(),
+            partial_out: None,
+        }
+    }
+
+    /// The same evaluator with `effect`'s state partialled out of the operating point
+    /// ([`crate::form::PartialOut`]); the precomputed series are shared, not copied.
+    pub fn partialled_out(&self, effect: Effect, weights: std::sync::Arc<crate::form::PartialOut>) -> Self {
+        Self {
+            ds: self.ds,
+            base: self.base,
+            t_ref_c: self.t_ref_c,
+            v_ref_mps: self.v_ref_mps,
+            severe: self.severe.clone(),
+            lagged_temp: self.lagged_temp.clone(),
+            relaxed_cache: self.relaxed_cache.clone(),
+            partial_out: Some((effect, weights)),
+        }
+    }
+
+    /// Whether `effect`'s state is partialled out here.
+    pub fn partialled(&self, effect: Effect) -> bool {
+        self.partial_out_of(effect).is_some()
+    }
+
+    /// The weights of `effect` if its state is partialled out here.
+    fn partial_out_of(&self, effect: Effect) -> Option<&crate::form::PartialOut> {
+        self.partial_out.as_ref().filter(|(e, _)| *e == effect).map(|(_, w)| w.as_ref())
     }
 
     /// The references of the state variables.
@@ -485,7 +522,18 @@ impl<'a> Evaluator<'a> {
     }
 
     /// Basis function values of `effect`'s `basis` at every point, for `choice`.
+    /// (With the operating point's share taken out where this evaluator partials `effect` out.)
     pub fn basis_at_points(&self, effect: Effect, basis: u8, choice: &state::Choice) -> Vec<f64> {
+        let raw = self.raw_basis_at_points(effect, basis, choice);
+        match self.partial_out_of(effect) {
+            Some(w) => w.residualized(&raw),
+            None => raw,
+        }
+    }
+
+    /// Basis function values as the state gives them, never partialled out (for the size of a
+    /// coefficient's prior: the state's own range).
+    pub fn raw_basis_at_points(&self, effect: Effect, basis: u8, choice: &state::Choice) -> Vec<f64> {
         let (temp, severe) = self.choice_series(choice);
         let refs = self.references();
         self.ds
@@ -528,14 +576,40 @@ impl<'a> Evaluator<'a> {
             })
             .collect();
         let refs = self.references();
+        // A partialled-out state effect: its contribution (eight log-factors and the radius) at
+        // every point, for the operating point's share of it.
+        let partialled: Option<(usize, &crate::form::PartialOut, Vec<[f64; 9]>)> =
+            states.iter().enumerate().find_map(|(si, (p, (temp, severe)))| {
+                let w = self.partial_out_of(p.effect)?;
+                let contrib = self
+                    .ds
+                    .points
+                    .iter()
+                    .map(|&i| {
+                        let (mut log_f, mut drl_m) = ([0.0; 8], 0.0);
+                        p.accumulate(&self.state_at(temp, severe, i), &refs, &mut log_f, &mut drl_m);
+                        std::array::from_fn(|m| if m < 8 { log_f[m] } else { drl_m })
+                    })
+                    .collect();
+                Some((si, w, contrib))
+            });
         which
             .iter()
             .map(|&kpt| {
                 let i = self.ds.points[kpt];
                 let mut log_f = [0.0; 8];
                 let mut drl_m = 0.0;
-                for (p, (temp, severe)) in &states {
-                    p.accumulate(&self.state_at(temp, severe, i), &refs, &mut log_f, &mut drl_m);
+                for (si, (p, (temp, severe))) in states.iter().enumerate() {
+                    match &partialled {
+                        Some((pi, w, contrib)) if *pi == si => {
+                            let expected = w.expected_at(contrib, kpt);
+                            for m in 0..8 {
+                                log_f[m] += contrib[kpt][m] - expected[m];
+                            }
+                            drl_m += contrib[kpt][8] - expected[8];
+                        }
+                        _ => p.accumulate(&self.state_at(temp, severe, i), &refs, &mut log_f, &mut drl_m),
+                    }
                 }
                 if let Some(pt) = perturb
                     && let Some(l) = log_f.get_mut(pt.factor)

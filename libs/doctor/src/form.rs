@@ -299,6 +299,102 @@ pub fn leave_one_sweep_out(ds: &Dataset, resid: &[[f64; 4]], bw: &Bandwidths) ->
     (0..ds.len()).map(|k| smooth_at(ds, &x, &visit, resid, &index, k)).collect()
 }
 
+/// The operating point's share of a state variable, to be taken out of a state candidate
+/// scored against the form error.
+///
+/// Scored against measured − model − form error, a state candidate sees only what its state
+/// does *beyond* what the operating point predicts of it: the form error is the kernel average
+/// of other visits' residuals, and those residuals carry the state effect of those visits. If
+/// the candidate is then fitted with its raw state variable z, it must explain θ·(z − E[z | x])
+/// with θ·z — its fit is pulled towards zero and explains less than the data show, the more so
+/// the more the test plan ties the state to the operating point (a TTC run visits its cells in
+/// time order, so temperature and wear grow with the cell). Fitted with z − E[z | x] instead
+/// (Robinson's partialling-out), θ is estimated from what varies between visits of one
+/// operating point and the evidence counts all of it — and nothing that the operating point
+/// alone explains. E[· | x] is the same smoother as the form error's (local-linear, kernels in
+/// slip, load, camber, pressure, other visits only), applied to the state variable at every
+/// point: it is a covariate, not a measurement, so held-out points may use it.
+#[derive(Debug, Clone)]
+pub struct PartialOut {
+    /// Per point, the smoother's equivalent-kernel weights over other points.
+    rows: Vec<Vec<(u32, f32)>>,
+}
+
+impl PartialOut {
+    /// The smoother's weights at every point of `ds`.
+    pub fn new(ds: &Dataset, bw: &Bandwidths) -> Self {
+        use nalgebra::{Matrix6, Vector6};
+        let x = scaled_points(ds, bw);
+        let visit = visits(ds, &x);
+        let all: Vec<usize> = (0..ds.len()).collect();
+        let index = NeighbourIndex::new(&x, &all);
+        let row_at = |k: usize| -> Vec<(u32, f32)> {
+            let own = visit[ds.point_sweep(k)];
+            let mut near: Vec<(usize, f64, Vector6<f64>)> = Vec::new();
+            let mut a = Matrix6::<f64>::zeros();
+            index.for_each_near(&x[k], |j| {
+                if visit[ds.point_sweep(j)] == own {
+                    return;
+                }
+                let d: [f64; 5] = std::array::from_fn(|m| x[j][m] - x[k][m]);
+                let d2: f64 = d.iter().map(|v| v * v).sum();
+                if d2 > MAX_D2 || !d2.is_finite() {
+                    return;
+                }
+                let w = (-0.5 * d2).exp();
+                let z = Vector6::new(1.0, d[0], d[1], d[2], d[3], d[4]);
+                a += w * z * z.transpose();
+                near.push((j, w, z));
+            });
+            a[(0, 0)] += PRIOR_WEIGHT;
+            for i in 1..6 {
+                a[(i, i)] += SLOPE_RIDGE;
+            }
+            // The estimate at k is e₀ᵀA⁻¹Σ w_j z_j v_j: point j's weight is w_j z_jᵀA⁻¹e₀.
+            let Some(v) = a.cholesky().map(|c| c.solve(&Vector6::new(1.0, 0.0, 0.0, 0.0, 0.0, 0.0))) else {
+                return Vec::new();
+            };
+            near.into_iter().map(|(j, w, z)| (j as u32, (w * z.dot(&v)) as f32)).filter(|e| e.1 != 0.0).collect()
+        };
+        let n = ds.len();
+        let threads = std::thread::available_parallelism().map_or(1, |t| t.get()).clamp(1, 4);
+        let chunk = n.div_ceil(threads).max(1);
+        let rows = std::thread::scope(|sc| {
+            let handles: Vec<_> = (0..n)
+                .step_by(chunk)
+                .map(|lo| {
+                    let row_at = &row_at;
+                    sc.spawn(move || (lo..(lo + chunk).min(n)).map(row_at).collect::<Vec<_>>())
+                })
+                .collect();
+            // A worker only panics on a bug; surface it.
+            handles.into_iter().flat_map(|h| h.join().expect("partial-out worker")).collect()
+        });
+        Self { rows }
+    }
+
+    /// E[v | x] at point `k` from the other visits' values (non-finite values count as 0).
+    pub fn expected_at<const M: usize>(&self, values: &[[f64; M]], k: usize) -> [f64; M] {
+        let mut out = [0.0; M];
+        for &(j, w) in self.rows.get(k).map_or(&[][..], |r| r.as_slice()) {
+            if let Some(v) = values.get(j as usize) {
+                for m in 0..M {
+                    if v[m].is_finite() {
+                        out[m] += f64::from(w) * v[m];
+                    }
+                }
+            }
+        }
+        out
+    }
+
+    /// v − E[v | x] at every point.
+    pub fn residualized(&self, values: &[f64]) -> Vec<f64> {
+        let wrapped: Vec<[f64; 1]> = values.iter().map(|&v| [v]).collect();
+        (0..values.len()).map(|k| values[k] - self.expected_at(&wrapped, k)[0]).collect()
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -405,6 +501,33 @@ mod tests {
         for k in (0..ds.len()).filter(|&k| ds.point_sweep(k) == 5) {
             let left = resid[k][0] - corr[k][0];
             assert!((left - 50.0).abs() < 5.0, "point {k}: {left} of the sweep's 50 N left");
+        }
+    }
+
+    #[test]
+    fn partialling_out_keeps_only_what_varies_between_visits_of_one_operating_point() {
+        // A state that is a smooth function of load (as temperature is on a plan that heats
+        // more at higher loads) plus, in the last sweep only, a visit of its own (that sweep
+        // ran hotter than its twin at the same load).
+        let (ds, _) = dataset();
+        let fz = |k: usize| ds.series.fz_n[ds.points[k]];
+        let z: Vec<f64> =
+            (0..ds.len()).map(|k| 0.01 * fz(k) + if ds.point_sweep(k) == 5 { 5.0 } else { 0.0 }).collect();
+        let po = PartialOut::new(&ds, &Bandwidths::from_data(&ds));
+        let left = po.residualized(&z);
+        for k in 0..ds.len() {
+            let (sweep, mid) = (ds.point_sweep(k), ds.series.alpha_deg[ds.points[k]].abs() < 5.0);
+            if !mid {
+                continue;
+            }
+            match sweep {
+                // Its twin (sweep 2) says what the load predicts: the sweep's own +5 is left.
+                5 => assert!((left[k] - 5.0).abs() < 1.0, "point {k}: {} of the visit's own 5 left", left[k]),
+                // The twin of sweep 5 takes most of that offset as its expectation (−5..0).
+                2 => assert!((-5.0..0.0).contains(&left[k]), "point {k}: {}", left[k]),
+                // The state itself is 10–30 there: all of it the load's.
+                _ => assert!(left[k].abs() < 1.2, "point {k}: the load's share was not taken out ({})", left[k]),
+            }
         }
     }
 

@@ -99,7 +99,16 @@ impl Design {
                         v
                     }
                 };
-                let phi_max = phi.iter().fold(0.0f64, |m, v| m.max(v.abs())).max(1e-9);
+                // The prior is on the state's own range, also where the fit sees it with the
+                // operating point's share taken out.
+                let raw;
+                let range = if ev.partialled(e.effect) {
+                    raw = ev.raw_basis_at_points(e.effect, t.basis, &choice);
+                    &raw
+                } else {
+                    &phi
+                };
+                let phi_max = range.iter().fold(0.0f64, |m, v| m.max(v.abs())).max(1e-9);
                 let sd = if t.factor == state::Factor::Radius { PRIOR_RADIUS_MM } else { PRIOR_LOG_FACTOR } / phi_max;
                 cols.push(Column { slot, term: t, phi, prior_precision: 1.0 / (sd * sd) });
             }
