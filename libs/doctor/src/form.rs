@@ -515,18 +515,18 @@ mod tests {
             (0..ds.len()).map(|k| 0.01 * fz(k) + if ds.point_sweep(k) == 5 { 5.0 } else { 0.0 }).collect();
         let po = PartialOut::new(&ds, &Bandwidths::from_data(&ds));
         let left = po.residualized(&z);
-        for k in 0..ds.len() {
+        for (k, &left_k) in left.iter().enumerate() {
             let (sweep, mid) = (ds.point_sweep(k), ds.series.alpha_deg[ds.points[k]].abs() < 5.0);
             if !mid {
                 continue;
             }
             match sweep {
                 // Its twin (sweep 2) says what the load predicts: the sweep's own +5 is left.
-                5 => assert!((left[k] - 5.0).abs() < 1.0, "point {k}: {} of the visit's own 5 left", left[k]),
+                5 => assert!((left_k - 5.0).abs() < 1.0, "point {k}: {left_k} of the visit's own 5 left"),
                 // The twin of sweep 5 takes most of that offset as its expectation (−5..0).
-                2 => assert!((-5.0..0.0).contains(&left[k]), "point {k}: {}", left[k]),
+                2 => assert!((-5.0..0.0).contains(&left_k), "point {k}: {left_k}"),
                 // The state itself is 10–30 there: all of it the load's.
-                _ => assert!(left[k].abs() < 1.2, "point {k}: the load's share was not taken out ({})", left[k]),
+                _ => assert!(left_k.abs() < 1.2, "point {k}: the load's share was not taken out ({left_k})"),
             }
         }
     }
