@@ -9,9 +9,9 @@
   ``libddsc0debian``) accepts our keystore's documents and enforces them: a monitor enclave may
   not write commands, a Cyclone rig enclave's samples reach a Cyclone monitor enclave, and
   participants without credentials or from another keystore read nothing.
-- RustDDS 0.15.1 and Cyclone DDS 0.10.2 do not complete the authentication handshake with each
-  other (docs/security.md, "Interoperability"): that test is a strict xfail, so it reports the
-  day either side is fixed.
+- RustDDS and Cyclone DDS 0.10.2 interoperate with security: a Cyclone monitor enclave reads the
+  secured test pattern's signed samples from tyrerig (RustDDS 0.15.1 as vendored with tyrerig's
+  patches, vendor/rustdds/PATCHES.md 2a-2e; docs/security.md, "Interoperability").
 
 Needs tyrerig built with ``--features security`` (scripts/test does) and Debian's Cyclone DDS
 packages (``.ci/run`` installs them).
@@ -335,13 +335,6 @@ def test_cyclone_dds_runs_a_secured_domain_on_our_keystore(domain_id, keystores,
         assert rc == 2 and not samples_in(out), f"{who}: exit {rc}: {out[:300]} {err[-1000:]}"
 
 
-@pytest.mark.xfail(strict=True, reason=(
-    "RustDDS (vendored, patched) <-> Cyclone DDS 0.10.2 now authenticate (docs/security.md, "
-    "Interoperability), but with this pair of enclaves RustDDS requests and sends its crypto tokens "
-    "as soon as it sends the final handshake message, before Cyclone has matched its volatile "
-    "secure reader; Cyclone's volatile reader never asks for those samples, so it cannot decode "
-    "RustDDS's secured traffic. In the other direction the tokens arrive, but Cyclone calls the "
-    "signed rt/rig/sample submessages malformed ('SEC_PREFIX Submsg 0x01 does not fit message')"))
 def test_cyclone_dds_reads_the_rust_suites_samples(tyrerig, domain_id, keystores, cyclone_peer, tmp_path):
     launch = secure_launch(tmp_path / "pattern.toml", domain_id, keystores["ours"])
     env = {**os.environ, "RUST_LOG": "error,rustdds::discovery::secure_discovery=error,rustdds::dds::pubsub=off"}

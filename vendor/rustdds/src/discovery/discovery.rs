@@ -197,6 +197,12 @@ enum DiscoveryTimerEvent {
   PublishParticipantMessage,
   #[cfg(feature = "security")]
   CachedSecureMessageResend,
+  // tyrerig patch (PATCHES.md 2e): one-shot, the handshake requester's delayed
+  // start of the key exchange with this remote participant.
+  #[cfg(feature = "security")]
+  StartKeyExchange {
+    participant_guid_prefix: GuidPrefix,
+  },
 }
 
 // Enum indicating if secure discovery allows normal discovery to process
@@ -305,6 +311,14 @@ impl Discovery {
   const CHECK_PARTICIPANT_MESSAGES: StdDuration = StdDuration::from_secs(1);
   #[cfg(feature = "security")]
   const CACHED_SECURE_DISCOVERY_MESSAGE_RESEND_PERIOD: StdDuration = StdDuration::from_secs(1);
+  // tyrerig patch (PATCHES.md 2e): how long the handshake requester waits after
+  // sending the HandshakeFinal before it sends its crypto tokens on the volatile
+  // secure topic. The replier matches its volatile secure reader with our
+  // writer only once it has processed the final message; tokens that arrive
+  // before that are dropped, and a volatile reader never asks for them again.
+  // Cyclone DDS, as the requester, waits 100 ms for the same reason.
+  #[cfg(feature = "security")]
+  const KEY_EXCHANGE_DELAY_AS_REQUESTER: StdDuration = StdDuration::from_millis(200);
 
   #[allow(clippy::too_many_arguments)]
   pub fn new(
@@ -813,7 +827,18 @@ impl Discovery {
                 DiscoveryCommand::StartKeyExchangeWithRemoteParticipant {
                   participant_guid_prefix,
                 } => {
-                  if let Some(security) = self.security_opt.as_mut() {
+                  // tyrerig patch (PATCHES.md 2e): the participant with the lower
+                  // GUID prefix requested the handshake (DDS Security 1.1 9.3.2.5)
+                  // and sent the final message just now: give the replier time
+                  // to process it before our tokens arrive.
+                  if self.domain_participant.guid_prefix() < participant_guid_prefix {
+                    self.discovery_timer.borrow_mut().set_timeout(
+                      Self::KEY_EXCHANGE_DELAY_AS_REQUESTER,
+                      DiscoveryTimerEvent::StartKeyExchange {
+                        participant_guid_prefix,
+                      },
+                    );
+                  } else if let Some(security) = self.security_opt.as_mut() {
                     security.start_key_exchange_with_remote_participant(
                       participant_guid_prefix,
                       &self.dcps_participant_volatile_message_secure.writer,
@@ -901,6 +926,18 @@ impl Discovery {
                     Self::CACHED_SECURE_DISCOVERY_MESSAGE_RESEND_PERIOD,
                     DiscoveryTimerEvent::CachedSecureMessageResend,
                   );
+                }
+                #[cfg(feature = "security")]
+                DiscoveryTimerEvent::StartKeyExchange {
+                  participant_guid_prefix,
+                } => {
+                  if let Some(security) = self.security_opt.as_mut() {
+                    security.start_key_exchange_with_remote_participant(
+                      participant_guid_prefix,
+                      &self.dcps_participant_volatile_message_secure.writer,
+                      &self.discovery_db,
+                    );
+                  }
                 }
               }
             }

@@ -17,7 +17,7 @@ use crate::{
     secure_rtps_postfix::SecureRTPSPostfix,
     secure_rtps_prefix::SecureRTPSPrefix,
     submessage::SecuritySubmessage,
-    submessage_flag::FromEndianness,
+    submessage_flag::{endianness_flag, FromEndianness},
     submessages::InterpreterSubmessage,
   },
   rtps::{Message, Submessage, SubmessageBody},
@@ -98,10 +98,19 @@ impl CryptographicBuiltin {
       crypto_footer: CryptoFooter::try_from(crypto_footer)?,
     };
 
+    // tyrerig patch: the SEC_PREFIX and SEC_POSTFIX submessage headers are
+    // written in the byte order of the submessage they wrap (the SEC_BODY when
+    // encrypted, the plain submessage when only signed), was always big-endian.
+    // Their contents (CryptoHeader, CryptoFooter) are octet arrays serialized
+    // big-endian by the plugin either way (9.5.2.3, 9.5.2.5); the E flag only
+    // sets the byte order of octetsToNextHeader. Cyclone DDS reads the wrapped
+    // submessage's and the postfix's length in the prefix's byte order, so a
+    // big-endian prefix before a little-endian DATA was "malformed" to it.
+    let wrapper_endianness = endianness_flag(encoded_submessage.header.flags);
     Ok(EncodedSubmessage::Encoded(
-      prefix.create_submessage(speedy::Endianness::BigEndian)?, // 9.5.2.3 use BigEndian
+      prefix.create_submessage(wrapper_endianness)?,
       encoded_submessage,
-      postfix.create_submessage(speedy::Endianness::BigEndian)?, // 9.5.2.5 use BigEndian
+      postfix.create_submessage(wrapper_endianness)?,
     ))
   }
 }
@@ -844,6 +853,115 @@ impl CryptoTransform for CryptographicBuiltin {
         let ciphertext = CryptoContent::read_from_buffer(content_bytes)?.data;
         decrypt(decode_key, initialization_vector, &ciphertext, common_mac)
       }
+    }
+  }
+}
+
+// tyrerig patch (PATCHES.md 2d): a signed submessage's SEC_PREFIX and
+// SEC_POSTFIX share the byte order of the submessage they wrap.
+#[cfg(test)]
+mod tests {
+  use speedy::Endianness;
+
+  use super::*;
+  use crate::{
+    messages::submessages::{heartbeat::Heartbeat, submessage_flag::HEARTBEAT_Flags},
+    security::{
+      access_control::{EndpointSecurityAttributes, ParticipantSecurityAttributes},
+      cryptographic::cryptographic_plugin::{CryptoKeyFactory, CryptoTransform},
+      PluginSecurityAttributesMask,
+    },
+    messages::submessages::submessage_kind::SubmessageKind,
+    structure::{guid::EntityId, sequence_number::SequenceNumber},
+  };
+
+  // The builtin plugins' "is valid" bit (DDS Security 1.1, 9.4.2.4 and 9.4.2.6).
+  const VALID: PluginSecurityAttributesMask = PluginSecurityAttributesMask(0x8000_0000);
+
+  // A user writer whose submessages are signed (AES-GMAC), as with the governance's
+  // metadata_protection_kind SIGN: the plain submessage stays in place between the
+  // SEC_PREFIX and the SEC_POSTFIX.
+  fn signed_heartbeat(endianness: Endianness) -> (Submessage, Submessage, Submessage) {
+    let mut crypto = CryptographicBuiltin::new();
+    let participant = crypto
+      .register_local_participant(
+        1,
+        1,
+        &[],
+        ParticipantSecurityAttributes {
+          plugin_participant_attributes: VALID,
+          ..ParticipantSecurityAttributes::empty()
+        },
+      )
+      .unwrap();
+    let writer = crypto
+      .register_local_datawriter(
+        participant,
+        &[],
+        EndpointSecurityAttributes {
+          is_submessage_protected: true,
+          plugin_endpoint_attributes: VALID,
+          ..EndpointSecurityAttributes::empty()
+        },
+      )
+      .unwrap();
+    let heartbeat = Heartbeat {
+      reader_id: EntityId::UNKNOWN,
+      writer_id: EntityId::UNKNOWN,
+      first_sn: SequenceNumber::new(1),
+      last_sn: SequenceNumber::new(9),
+      count: 1,
+    }
+    .create_submessage(BitFlags::<HEARTBEAT_Flags>::from_endianness(endianness))
+    .unwrap();
+    match crypto
+      .encode_datawriter_submessage(heartbeat, writer, vec![])
+      .unwrap()
+    {
+      EncodedSubmessage::Encoded(prefix, body, postfix) => (prefix, body, postfix),
+      EncodedSubmessage::Unencoded(_) => panic!("a protected writer's submessage was not encoded"),
+    }
+  }
+
+  #[test]
+  fn signed_submessage_prefix_and_postfix_have_its_byte_order() {
+    for endianness in [Endianness::LittleEndian, Endianness::BigEndian] {
+      let (prefix, body, postfix) = signed_heartbeat(endianness);
+      assert_eq!(body.header.kind, SubmessageKind::HEARTBEAT);
+      assert_eq!(endianness_flag(body.header.flags), endianness);
+      assert_eq!(
+        endianness_flag(prefix.header.flags),
+        endianness,
+        "SEC_PREFIX"
+      );
+      assert_eq!(
+        endianness_flag(postfix.header.flags),
+        endianness,
+        "SEC_POSTFIX"
+      );
+
+      // On the wire: a reader that takes the byte order of the three from the
+      // SEC_PREFIX (as Cyclone DDS does) finds each length where it is.
+      let bytes = [&prefix, &body, &postfix]
+        .iter()
+        .flat_map(|s| s.write_to_vec().unwrap())
+        .collect::<Vec<u8>>();
+      let prefix_order = endianness_flag(bytes[1]);
+      let mut at = 0;
+      for expected in [
+        SubmessageKind::SEC_PREFIX,
+        SubmessageKind::HEARTBEAT,
+        SubmessageKind::SEC_POSTFIX,
+      ] {
+        assert_eq!(bytes[at], u8::from(expected), "submessage id at {at}");
+        let len = [bytes[at + 2], bytes[at + 3]];
+        let len = match prefix_order {
+          Endianness::LittleEndian => u16::from_le_bytes(len),
+          Endianness::BigEndian => u16::from_be_bytes(len),
+        };
+        at += 4 + usize::from(len);
+      }
+      assert_eq!(at, bytes.len());
     }
   }
 }
