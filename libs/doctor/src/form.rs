@@ -217,6 +217,30 @@ impl NeighbourIndex {
     }
 }
 
+/// Calls `f(j, w, z)` for every indexed point `j` of another visit than `k`'s within the
+/// cut-off: its Gaussian kernel weight `w` and local-linear regressor z = (1, x_j − x_k).
+fn for_each_kernel_neighbour(
+    ds: &Dataset,
+    x: &[[f64; 5]],
+    visit: &[usize],
+    index: &NeighbourIndex,
+    k: usize,
+    mut f: impl FnMut(usize, f64, nalgebra::Vector6<f64>),
+) {
+    let own = visit[ds.point_sweep(k)];
+    index.for_each_near(&x[k], |j| {
+        if visit[ds.point_sweep(j)] == own {
+            return;
+        }
+        let d: [f64; 5] = std::array::from_fn(|m| x[j][m] - x[k][m]);
+        let d2: f64 = d.iter().map(|v| v * v).sum();
+        if d2 > MAX_D2 || !d2.is_finite() {
+            return;
+        }
+        f(j, (-0.5 * d2).exp(), nalgebra::Vector6::new(1.0, d[0], d[1], d[2], d[3], d[4]));
+    });
+}
+
 /// Local-linear kernel regression at point `k` of `resid` over the indexed points whose visit
 /// differs from `k`'s: the form error between neighbouring loads, cambers and pressures is
 /// interpolated along its trend, where a plain kernel average would be pulled towards the
@@ -230,20 +254,9 @@ fn smooth_at(
     k: usize,
 ) -> [f64; 4] {
     use nalgebra::{Matrix6, Vector6};
-    let own = visit[ds.point_sweep(k)];
     let mut a = [Matrix6::<f64>::zeros(); 4];
     let mut b = [Vector6::<f64>::zeros(); 4];
-    index.for_each_near(&x[k], |j| {
-        if visit[ds.point_sweep(j)] == own {
-            return;
-        }
-        let d: [f64; 5] = std::array::from_fn(|m| x[j][m] - x[k][m]);
-        let d2: f64 = d.iter().map(|v| v * v).sum();
-        if d2 > MAX_D2 || !d2.is_finite() {
-            return;
-        }
-        let w = (-0.5 * d2).exp();
-        let z = Vector6::new(1.0, d[0], d[1], d[2], d[3], d[4]);
+    for_each_kernel_neighbour(ds, x, visit, index, k, |j, w, z| {
         let wzz = w * z * z.transpose();
         for ch in 0..4 {
             let r = resid[j][ch];
@@ -329,20 +342,9 @@ impl PartialOut {
         let all: Vec<usize> = (0..ds.len()).collect();
         let index = NeighbourIndex::new(&x, &all);
         let row_at = |k: usize| -> Vec<(u32, f32)> {
-            let own = visit[ds.point_sweep(k)];
             let mut near: Vec<(usize, f64, Vector6<f64>)> = Vec::new();
             let mut a = Matrix6::<f64>::zeros();
-            index.for_each_near(&x[k], |j| {
-                if visit[ds.point_sweep(j)] == own {
-                    return;
-                }
-                let d: [f64; 5] = std::array::from_fn(|m| x[j][m] - x[k][m]);
-                let d2: f64 = d.iter().map(|v| v * v).sum();
-                if d2 > MAX_D2 || !d2.is_finite() {
-                    return;
-                }
-                let w = (-0.5 * d2).exp();
-                let z = Vector6::new(1.0, d[0], d[1], d[2], d[3], d[4]);
+            for_each_kernel_neighbour(ds, &x, &visit, &index, k, |j, w, z| {
                 a += w * z * z.transpose();
                 near.push((j, w, z));
             });
