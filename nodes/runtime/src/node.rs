@@ -23,6 +23,10 @@ pub enum RuntimeError {
     WrongType { node: String, topic: String, expected: String, requested: String },
 }
 
+/// How long [`RosNode::linger_for_repair`] keeps a stopping node's writers alive: ten of
+/// RustDDS's fast heartbeat periods, so a reader behind by a lost datagram has ten chances to ask.
+pub const REPAIR_LINGER: std::time::Duration = std::time::Duration::from_secs(1);
+
 /// A suite node's DDS presence. Create it inside a tokio runtime: the ROS 2 spinner (discovery
 /// graph, parameter events) runs as a task on it.
 pub struct RosNode {
@@ -99,6 +103,15 @@ impl RosNode {
 
     pub fn domain_id(&self) -> u16 {
         self.domain_id
+    }
+
+    /// Keeps the participant up for [`REPAIR_LINGER`] after a node's last publication. A reliable
+    /// writer repairs a lost datagram only while its participant lives (a reader that missed the
+    /// last one asks for it after the writer's next heartbeat, every 100 ms while a reader is
+    /// behind); a node that exits right after its final message (the rig's closing count of its
+    /// samples) would otherwise leave a reader with whatever the network dropped last.
+    pub async fn linger_for_repair(&self) {
+        tokio::time::sleep(REPAIR_LINGER).await;
     }
 
     /// Full ROS name of a suite topic for this node's namespace.

@@ -364,6 +364,8 @@ pub async fn run(mut node: RosNode, cfg: VirtualRigNodeConfig, shutdown: Shutdow
     }
     if let Some(t) = last_stamp {
         announce_tally(t);
+        // The closing count is what a recorder's loss record measures its missing tail by.
+        node.linger_for_repair().await;
     }
     Ok(())
 }
