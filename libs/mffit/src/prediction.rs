@@ -413,15 +413,21 @@ pub fn prediction_maps_since(
             let Some(c) = ChannelCovariance::of(result, channel) else {
                 return PredictionMap::unfitted(channel, value);
             };
+            // The same covariance (bit for bit: the same Jacobian and residual variance, so the
+            // same points and residuals) and the same values: the previous map stands, form
+            // error included.
             let unchanged = previous.and_then(|(prev, maps)| {
                 let m = maps.iter().find(|m| m.channel == channel)?;
                 let pc = ChannelCovariance::of(prev, channel)?;
                 let same = c.same_as(&pc, result, prev)
                     && m.value.len() == value.len()
                     && m.value.iter().zip(&value).all(|(a, b)| a.to_bits() == b.to_bits());
-                same.then(|| m.std_param.clone())
+                same.then(|| m.clone())
             });
-            let std_param = unchanged.unwrap_or_else(|| c.stds(result, channel, &batch, threads));
+            if let Some(m) = unchanged {
+                return m;
+            }
+            let std_param = c.stds(result, channel, &batch, threads);
             let (std_form, extrapolated) = form_errors(result, channel, &inputs)
                 .unwrap_or_else(|| (vec![0.0; inputs.len()], vec![false; inputs.len()]));
             let std = std_param.iter().zip(&std_form).map(|(a, b)| a.hypot(*b)).collect();
