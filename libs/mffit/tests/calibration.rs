@@ -74,4 +74,11 @@ fn the_form_error_makes_the_band_hold_a_tyre_the_model_cannot_represent() {
         "median |error|/σ {:.2} with the form error: neither too narrow nor trivially wide",
         f.median_error_over_std
     );
+    // Outside the tested envelope (cambers ±4°, the highest load) the band widens to the
+    // channel's worst in-envelope form error and says it is extrapolated.
+    let m = maps.iter().find(|m| m.channel == MapChannel::FyPure).expect("an FYW map");
+    let worst = m.std_form.iter().zip(&m.extrapolated).filter(|(_, x)| !**x).map(|(s, _)| *s).fold(0.0, f64::max);
+    let outside: Vec<f64> = m.std_form.iter().zip(&m.extrapolated).filter(|(_, x)| **x).map(|(s, _)| *s).collect();
+    assert!(worst > 0.0 && !outside.is_empty());
+    assert!(outside.iter().all(|s| *s == worst), "extrapolated points carry the worst in-envelope τ {worst}");
 }
