@@ -580,7 +580,7 @@ pub struct ModelMap {
     pub residual_rmse: f64,
     /// model prediction at each grid point
     pub value: Vec<f64>,
-    /// 1 sigma of the prediction (delta method)
+    /// 1 sigma of the model's mean: parameter covariance and form error in quadrature
     pub std: Vec<f64>,
 }
 

@@ -37,7 +37,9 @@ impl Support {
         }
     }
 
-    fn near(&self, set: &[MfInput], x: &MfInput) -> bool {
+    /// True when a point of `set` (one of this support's sets) lies within the box around `x`;
+    /// always for an empty set.
+    pub fn near(&self, set: &[MfInput], x: &MfInput) -> bool {
         if set.is_empty() {
             return true;
         }

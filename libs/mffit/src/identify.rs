@@ -360,6 +360,11 @@ pub struct Estimate {
     pub value: f64,
     /// Standard deviation (1σ), same units; NaN when the covariance is singular.
     pub std: f64,
+    /// 1σ from refits that each leave out a fold of the sweeps (grouped jackknife over the
+    /// cross-validation's folds, [`crate::stages::crossval`]): it counts how much the value
+    /// depends on which sweeps were tested, form error and correlated noise included, which
+    /// `std` (repeatability under a correct model) does not. `None` without cross-validation.
+    pub std_sweeps: Option<f64>,
 }
 
 /// Standard deviations of the fitted `keys` at the solution `params`.
@@ -406,7 +411,12 @@ pub fn uncertainty_from(
 ) -> (Vec<Estimate>, f64, Vec<f64>) {
     let n = keys.len();
     let m = points.len();
-    let nan = |k: &&str| Estimate { key: (*k).into(), value: params.get(k).unwrap_or(f64::NAN), std: f64::NAN };
+    let nan = |k: &&str| Estimate {
+        key: (*k).into(),
+        value: params.get(k).unwrap_or(f64::NAN),
+        std: f64::NAN,
+        std_sweeps: None,
+    };
     if n == 0 || m <= n {
         return (keys.iter().map(nan).collect(), 1.0, Vec::new());
     }
@@ -445,6 +455,7 @@ pub fn uncertainty_from(
             key: keys[c].into(),
             value: params.get(keys[c]).unwrap_or(f64::NAN),
             std: cov[c * n + c].sqrt(),
+            std_sweeps: None,
         })
         .collect();
     (estimates, inflation, cov)

@@ -13,6 +13,7 @@
 //! * [`metrics`], [`report`]: per-stage/per-channel RMSE, NRMSE, bias, max error, R² grouped by
 //!   load, pressure and camber; Markdown, `fit.json` and PNG/SVG plots.
 //! * [`accuracy`]: fitted-versus-reference model comparison on a held-out grid.
+//! * [`calibration`]: how well the band of the mean holds a known true tyre.
 //! * [`synth`]: synthetic GS2MF-like data from a known tyre (tests, demos).
 //!
 //! ```no_run
@@ -22,11 +23,13 @@
 //! ```
 
 pub mod accuracy;
+pub mod calibration;
 pub mod checks;
 pub mod data;
 pub mod engine;
 mod error;
 pub mod fit;
+pub mod form_error;
 pub mod identify;
 pub mod logs;
 pub mod metrics;

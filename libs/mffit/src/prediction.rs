@@ -168,10 +168,53 @@ pub struct PredictionMap {
     pub channel: MapChannel,
     /// Model value at each grid point ([`EnvelopeGrid::inputs`] order).
     pub value: Vec<f64>,
-    /// 1σ of the model's prediction (delta method); NaN where a stage it depends on is not fitted.
+    /// 1σ of the model's mean prediction, every source counted: √(σ_param² + σ_form²). NaN
+    /// where a stage it depends on is not fitted.
     pub std: Vec<f64>,
+    /// The part of it from the fitted coefficients' covariance (delta method): repeatability
+    /// under a correct model.
+    pub std_param: Vec<f64>,
+    /// The part from the form error, what the model misses systematically where the data are
+    /// ([`crate::form_error`]); outside the tested envelope the channel's largest in-envelope
+    /// value (the data say nothing there; the worst seen is the honest guess).
+    pub std_form: Vec<f64>,
+    /// True at grid points outside the tested envelope (no data point within the
+    /// [`crate::accuracy::Support`] box): the value there is extrapolated.
+    pub extrapolated: Vec<bool>,
     /// The residual RMSE of the channel's stage (NaN before it is fitted).
     pub residual_rmse: f64,
+}
+
+impl PredictionMap {
+    /// A map of `channel` with `value` but no uncertainty yet (NaN σ, nothing extrapolated).
+    fn unfitted(channel: MapChannel, value: Vec<f64>) -> Self {
+        let n = value.len();
+        PredictionMap {
+            channel,
+            value,
+            std: vec![f64::NAN; n],
+            std_param: vec![f64::NAN; n],
+            std_form: vec![f64::NAN; n],
+            extrapolated: vec![false; n],
+            residual_rmse: f64::NAN,
+        }
+    }
+}
+
+/// The form error of `channel` at every one of `inputs` ([`crate::form_error`]) from its
+/// residual stage's points, and which inputs are extrapolated; `None` without that stage's data.
+fn form_errors(result: &FitResult, channel: MapChannel, inputs: &[MfInput]) -> Option<(Vec<f64>, Vec<bool>)> {
+    use crate::form_error::{FormError, SlipAxis};
+    let d = result.data.iter().find(|d| d.stage == channel.residual_stage())?;
+    let values = d.channel.values_at(&result.params, &d.points);
+    let axis = match channel {
+        MapChannel::FxPure => SlipAxis::Ratio,
+        MapChannel::FyPure | MapChannel::MzPure => SlipAxis::Angle,
+    };
+    let regions = FormError::of(&d.points, &d.groups, &values, axis, result.nominal.fz0_n).over(inputs);
+    let worst = regions.iter().filter(|r| r.tested).filter_map(|r| r.std).fold(0.0, f64::max);
+    let std = regions.iter().map(|r| if r.tested { r.std.unwrap_or(worst) } else { worst }).collect();
+    Some((std, regions.iter().map(|r| !r.tested).collect()))
 }
 
 /// The parameter covariance one channel's predictions depend on.
@@ -368,18 +411,27 @@ pub fn prediction_maps_since(
             let mut value = vec![0.0; inputs.len()];
             batch.eval(channel.channel(), &result.params, &mut BatchScratch::default(), &mut value);
             let Some(c) = ChannelCovariance::of(result, channel) else {
-                return PredictionMap { channel, value, std: vec![f64::NAN; inputs.len()], residual_rmse: f64::NAN };
+                return PredictionMap::unfitted(channel, value);
             };
+            // The same covariance (bit for bit: the same Jacobian and residual variance, so the
+            // same points and residuals) and the same values: the previous map stands, form
+            // error included.
             let unchanged = previous.and_then(|(prev, maps)| {
                 let m = maps.iter().find(|m| m.channel == channel)?;
                 let pc = ChannelCovariance::of(prev, channel)?;
                 let same = c.same_as(&pc, result, prev)
                     && m.value.len() == value.len()
                     && m.value.iter().zip(&value).all(|(a, b)| a.to_bits() == b.to_bits());
-                same.then(|| m.std.clone())
+                same.then(|| m.clone())
             });
-            let std = unchanged.unwrap_or_else(|| c.stds(result, channel, &batch, threads));
-            PredictionMap { channel, value, std, residual_rmse: c.residual_rmse() }
+            if let Some(m) = unchanged {
+                return m;
+            }
+            let std_param = c.stds(result, channel, &batch, threads);
+            let (std_form, extrapolated) = form_errors(result, channel, &inputs)
+                .unwrap_or_else(|| (vec![0.0; inputs.len()], vec![false; inputs.len()]));
+            let std = std_param.iter().zip(&std_form).map(|(a, b)| a.hypot(*b)).collect();
+            PredictionMap { channel, value, std, std_param, std_form, extrapolated, residual_rmse: c.residual_rmse() }
         })
         .collect()
 }

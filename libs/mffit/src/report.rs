@@ -211,14 +211,18 @@ fn markdown(
          data (two loads for a load term, three for a quadratic one; two cambers; two pressures), and the Jacobian at \
          the solution must tell it apart from the others. The rest keep the template's (or the stage's documented \
          starting) values. ±1σ comes from the Jacobian and the residual variance, inflated for serially correlated \
-         residuals; it describes repeatability, not model-form error (see the held-out column above).\n"
+         residuals; it describes repeatability, not model-form error (see the held-out column above). ±1σ over \
+         sweeps is the grouped jackknife over the cross-validation's folds (each fold's refit leaves out a fifth of \
+         the sweeps): how much the value depends on which sweeps were tested, form error included; where it is \
+         much larger than ±1σ, trust it.\n"
     );
     for st in result.stages.iter().filter(|st| !st.estimates.is_empty() || !st.held.is_empty()) {
         let _ = writeln!(s, "### {}\n", st.stage);
         if !st.estimates.is_empty() {
-            let _ = writeln!(s, "| key | value | ±1σ |\n|---|---|---|");
+            let _ = writeln!(s, "| key | value | ±1σ | ±1σ over sweeps |\n|---|---|---|---|");
             for e in &st.estimates {
-                let _ = writeln!(s, "| {} | {:.6} | {:.3e} |", e.key, e.value, e.std);
+                let sweeps = e.std_sweeps.map_or_else(|| "–".to_owned(), |v| format!("{v:.3e}"));
+                let _ = writeln!(s, "| {} | {:.6} | {:.3e} | {sweeps} |", e.key, e.value, e.std);
             }
             let _ = writeln!(s, "\n(serial-correlation variance inflation ×{:.1})\n", st.serial_inflation);
         }

@@ -247,11 +247,13 @@ fn prediction_maps_match_the_scalar_delta_method_point_by_point() {
             assert!((map.value[i] - value).abs() <= 1e-12 * value.abs().max(1.0), "{:?} #{i}", map.channel);
             let sd = cov.std_at(&result, map.channel, &inputs[i]);
             assert!(
-                (map.std[i] - sd).abs() <= 1e-5 * sd.abs() + 1e-9,
+                (map.std_param[i] - sd).abs() <= 1e-5 * sd.abs() + 1e-9,
                 "{:?} #{i}: map σ {} vs scalar σ {sd}",
                 map.channel,
-                map.std[i]
+                map.std_param[i]
             );
+            let total = map.std_param[i].hypot(map.std_form[i]);
+            assert_eq!(map.std[i].to_bits(), total.to_bits(), "{:?} #{i}: the total σ", map.channel);
         }
     }
 }

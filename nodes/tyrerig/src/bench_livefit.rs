@@ -7,6 +7,8 @@ use anyhow::Context as _;
 use livefit::replay::{Input, feed, inputs_of_log};
 use livefit::{LiveFit, LiveFitConfig, Trigger};
 use mffit::accuracy::{AccuracyRow, ReferenceTyre, Support, compare_with};
+use mffit::calibration::Calibration;
+use mffit::prediction::{EnvelopeGrid, PredictionMap};
 use mftyre::{MfInput, TyreParams, UseMode};
 use rigsim::VirtualTyre;
 use serde_json::json;
@@ -199,6 +201,24 @@ pub fn run(args: &LiveFitBench) -> anyhow::Result<()> {
             println!("{:<14} live model {:.3} % of peak RMS against the truth", l.channel, l.rms_pct_of_peak);
         }
     }
+    let calibration_json = match reference.as_ref() {
+        Some(t) => {
+            let grid = grid_of(last);
+            let maps = mffit::prediction::prediction_maps(&live, &grid);
+            let support = Support::of_fit(&live);
+            let score = |std: fn(&PredictionMap) -> &Vec<f64>| {
+                let band: Vec<PredictionMap> =
+                    maps.iter().map(|m| PredictionMap { std: std(m).clone(), ..m.clone() }).collect();
+                mffit::calibration::calibrate(&band, &grid, live.nominal.r0_m, t, &support)
+            };
+            let param = score(|m| &m.std_param);
+            let total = score(|m| &m.std);
+            print_calibration("σ of the coefficients alone (delta method)", &param);
+            print_calibration("σ with the form error", &total);
+            json!({"param": param, "total": total, "tested_points": tested_points(&maps, &grid, live.nominal.r0_m, t)})
+        }
+        None => serde_json::Value::Null,
+    };
     let mut coverage_json = serde_json::Value::Null;
     if let Some(h) = &args.heldout {
         let other = mffit::logs::read_log(h)?;
@@ -229,10 +249,60 @@ pub fn run(args: &LiveFitBench) -> anyhow::Result<()> {
             "live_accuracy": live_acc.iter().map(|a| json!({"channel": a.channel, "pct": a.rms_pct_of_peak})).collect::<Vec<_>>(),
             "offline": offline_json,
             "coverage": coverage_json,
+            "calibration": calibration_json,
         });
         std::fs::write(path, serde_json::to_string_pretty(&doc)?).with_context(|| format!("{}", path.display()))?;
     }
     Ok(())
+}
+
+/// The envelope grid of a model state (its own axes).
+fn grid_of(st: &ModelState) -> EnvelopeGrid {
+    EnvelopeGrid {
+        fz_n: st.grid_fz_n.clone(),
+        slip_angle_deg: st.grid_slip_angle_deg.clone(),
+        slip_ratio: st.grid_slip_ratio.clone(),
+        camber_deg: st.grid_camber_deg.clone(),
+        pressure_pa: st.grid_pressure_pa.clone(),
+        speed_mps: st.grid_speed_mps,
+    }
+}
+
+/// Every tested grid point of `maps` with the true value and the parts of σ (for analysis).
+fn tested_points(
+    maps: &[PredictionMap],
+    grid: &EnvelopeGrid,
+    r0_m: f64,
+    truth: &ReferenceTyre<'_>,
+) -> serde_json::Value {
+    let mut out = Vec::new();
+    for m in maps {
+        for (i, x) in grid.inputs(m.channel, r0_m).iter().enumerate().filter(|(i, _)| !m.extrapolated[*i]) {
+            out.push(json!({
+                "channel": m.channel.tydex_name(),
+                "fz_n": x.fz_n, "alpha_deg": x.alpha_rad.to_degrees(), "kappa": x.kappa,
+                "camber_deg": x.gamma_rad.to_degrees(), "p_pa": x.p_pa,
+                "truth": m.channel.channel().eval_reference(truth, x), "value": m.value[i],
+                "std_param": m.std_param[i], "std_form": m.std_form[i],
+            }));
+        }
+    }
+    serde_json::Value::Array(out)
+}
+
+/// Prints how the final model's band of the mean (`what` σ) holds the true tyre, per channel.
+fn print_calibration(what: &str, rows: &[Calibration]) {
+    println!("band of the mean (value ± 1.96·σ), {what}, against the true tyre on the model state's grid:");
+    for r in rows {
+        let part = |b: &mffit::calibration::BandScore| {
+            format!(
+                "{:>4} points {:>5.1} % in band, median |error|/σ {:>6.2}, median σ {:.3}, median |error| {:.3}",
+                b.points, b.in_band_pct, b.median_error_over_std, b.median_std, b.median_abs_error
+            )
+        };
+        println!("  {:<4} tested envelope: {}", r.channel, part(&r.tested));
+        println!("  {:<4} outside it:      {}", r.channel, part(&r.outside));
+    }
 }
 
 /// The run's true tyre: a `.tir` (MF-Tyre) or a brush tyre file (`.toml`).

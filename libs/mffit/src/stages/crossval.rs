@@ -39,6 +39,11 @@ pub struct HeldOut {
     pub nrmse_pct: f64,
     /// RMS of the all-data fit's errors on the same points, % of peak (for comparison).
     pub fit_nrmse_pct: f64,
+    /// Per fitted key (the stage's `primary_keys`, in order), 1σ of the grouped jackknife over
+    /// the folds: √((k−1)/k · Σ (θ_f − θ̄)²) of the k refits that each left out one fold of
+    /// sweeps.
+    #[serde(skip)]
+    pub jackknife_std: Vec<f64>,
 }
 
 /// Cross-validates `stage` over its `sel` points with `k` folds, refitting the stage's fitted
@@ -65,6 +70,7 @@ pub fn kfold(
     let mut se = 0.0;
     let mut se_fit = 0.0;
     let mut n = 0usize;
+    let mut refits: Vec<Vec<f64>> = Vec::with_capacity(k);
     for f in 0..k {
         let train = sel.by_group(|g| fold_of(g) != f);
         let test = sel.by_group(|g| fold_of(g) == f);
@@ -82,6 +88,7 @@ pub fn kfold(
                 fit_step_with(stage.name(), &mut p, keys, &train.points, channel, scale, &settings, penalty)?;
             }
         }
+        refits.push(crate::engine::values_of(&p, keys));
         for pt in &test.points {
             let e = channel.eval(&p, &pt.input) - pt.measured;
             let e_fit = channel.eval(params, &pt.input) - pt.measured;
@@ -103,7 +110,35 @@ pub fn kfold(
         rmse,
         nrmse_pct: 100.0 * rmse / peak,
         fit_nrmse_pct: 100.0 * (se_fit / n as f64).sqrt() / peak,
+        jackknife_std: jackknife_std(&refits, keys.len()),
     }))
+}
+
+/// √((k−1)/k · Σ_f (θ_f − θ̄)²) per key over `refits` (k rows of `n` values); NaN with fewer
+/// than two refits.
+fn jackknife_std(refits: &[Vec<f64>], n: usize) -> Vec<f64> {
+    let k = refits.len();
+    if k < 2 {
+        return vec![f64::NAN; n];
+    }
+    (0..n)
+        .map(|i| {
+            let mean = refits.iter().map(|r| r[i]).sum::<f64>() / k as f64;
+            let ss: f64 = refits.iter().map(|r| (r[i] - mean).powi(2)).sum();
+            ((k as f64 - 1.0) / k as f64 * ss).sqrt()
+        })
+        .collect()
+}
+
+#[cfg(test)]
+mod tests {
+    #[test]
+    fn the_jackknife_spread_is_the_grouped_formula() {
+        // Refits 1, 2, 3 of one key: mean 2, Σ(θ−θ̄)² = 2, (k−1)/k = 2/3 → √(4/3).
+        let s = super::jackknife_std(&[vec![1.0], vec![2.0], vec![3.0]], 1);
+        assert!((s[0] - (4.0f64 / 3.0).sqrt()).abs() < 1e-12);
+        assert!(super::jackknife_std(&[vec![1.0]], 1)[0].is_nan());
+    }
 }
 
 /// A fixed pseudo-random permutation of `0..n` (Fisher–Yates with a seeded ChaCha8).

@@ -678,6 +678,13 @@ pub fn fit(data: &Dataset, opts: &FitOptions) -> Result<FitResult, FitError> {
             let t = Instant::now();
             let sel = StagePoints { points: d.points.clone(), groups: d.groups.clone() };
             rep.heldout = crossval::kfold(&ctx, &params, *stage, rep, &sel, opts.folds)?;
+            if let Some(h) = &rep.heldout {
+                for (key, sd) in rep.primary_keys.iter().zip(&h.jackknife_std) {
+                    if let Some(e) = rep.estimates.iter_mut().find(|e| e.key == *key) {
+                        e.std_sweeps = Some(*sd);
+                    }
+                }
+            }
             rep.wall_s += t.elapsed().as_secs_f64();
         }
     }

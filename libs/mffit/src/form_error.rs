@@ -1,0 +1,259 @@
+//! Form error: what the fitted model systematically misses where the data are, as a residual
+//! model over the operating point.
+//!
+//! The delta-method σ of [`crate::prediction`] is the uncertainty of the model's mean *if the
+//! model could represent the tyre*: it shrinks with every point. What the Magic Formula cannot
+//! represent (a brush tyre, every real tyre), what coefficients held at template values leave
+//! out, and what the rig adds that is not noise stay in the residuals as a smooth part along each
+//! sweep. This module estimates the size of that smooth part around each operating point:
+//!
+//! 1. residuals r = model − measured at the stage's points;
+//! 2. per point i, the mean mᵢ of the residuals of its own sweep within a slip neighbourhood
+//!    (±[`SMOOTH_SLIP_ANGLE_DEG`] or ±[`SMOOTH_SLIP_RATIO`]), kᵢ points: the smooth part plus
+//!    noise/√kᵢ;
+//! 3. the noise variance s² from the differences of neighbouring residuals in slip within each
+//!    sweep (a difference of two noisy points has variance 2s²; the smooth part cancels);
+//! 4. qᵢ = mᵢ² − s²/kᵢ, an unbiased estimate of the squared smooth residual at point i;
+//! 5. at a grid point x, the form-error variance τ²(x) = mean of qᵢ over the points in the region
+//!    around x (load ±15 % Fz0, camber ±0.75°, pressure ±20 kPa, slip ±[`REGION_SLIP_ANGLE_DEG`]
+//!    or ±[`REGION_SLIP_RATIO`]), at least 0.
+//!
+//! Between data points the model's error against the true tyre is taken to be of the size the
+//! residuals show nearby (no more, no less: nothing is tuned to a coverage). The residuals of
+//! the fitted points are in-sample: with thousands of points and a few tens of coefficients
+//! the fit absorbs a negligible part of them.
+
+use mftyre::MfInput;
+
+use crate::engine::Point;
+
+/// Half-width of a point's smoothing neighbourhood in slip angle, deg.
+pub const SMOOTH_SLIP_ANGLE_DEG: f64 = 0.5;
+/// Half-width of a point's smoothing neighbourhood in slip ratio.
+pub const SMOOTH_SLIP_RATIO: f64 = 0.01;
+/// Half-width of a grid point's region in slip angle, deg.
+pub const REGION_SLIP_ANGLE_DEG: f64 = 2.0;
+/// Half-width of a grid point's region in slip ratio.
+pub const REGION_SLIP_RATIO: f64 = 0.04;
+/// Half-width of a grid point's region in load, fraction of Fz0.
+const REGION_LOAD_FRACTION: f64 = 0.15;
+/// Half-width of a grid point's region in camber, deg.
+const REGION_CAMBER_DEG: f64 = 0.75;
+/// Half-width of a grid point's region in pressure, Pa.
+const REGION_PRESSURE_PA: f64 = 20e3;
+
+/// Which slip a channel's sweeps run over.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum SlipAxis {
+    /// Slip angle (FY, MZ).
+    Angle,
+    /// Slip ratio (FX).
+    Ratio,
+}
+
+impl SlipAxis {
+    fn of(self, x: &MfInput) -> f64 {
+        match self {
+            SlipAxis::Angle => x.alpha_rad.to_degrees(),
+            SlipAxis::Ratio => x.kappa,
+        }
+    }
+
+    fn smooth(self) -> f64 {
+        match self {
+            SlipAxis::Angle => SMOOTH_SLIP_ANGLE_DEG,
+            SlipAxis::Ratio => SMOOTH_SLIP_RATIO,
+        }
+    }
+
+    fn region(self) -> f64 {
+        match self {
+            SlipAxis::Angle => REGION_SLIP_ANGLE_DEG,
+            SlipAxis::Ratio => REGION_SLIP_RATIO,
+        }
+    }
+}
+
+/// The squared smooth residual at each point of one stage, ready to be averaged over regions.
+#[derive(Debug, Clone)]
+pub struct FormError {
+    inputs: Vec<MfInput>,
+    /// qᵢ = mᵢ² − s²/kᵢ (may be negative: unbiased, not clamped per point).
+    q: Vec<f64>,
+    axis: SlipAxis,
+    fz0_n: f64,
+    /// The pooled noise variance s², channel units².
+    noise_var: f64,
+}
+
+impl FormError {
+    /// From the stage's `points` (their sweeps in `groups`) and the model's `values` at them.
+    pub fn of(points: &[Point], groups: &[usize], values: &[f64], axis: SlipAxis, fz0_n: f64) -> Self {
+        let n = points.len().min(groups.len()).min(values.len());
+        let res: Vec<f64> = (0..n).map(|i| values[i] - points[i].measured).collect();
+        let slip: Vec<f64> = points[..n].iter().map(|p| axis.of(&p.input)).collect();
+        // Points of each sweep, sorted by slip: a neighbourhood is then a window.
+        let mut by_group: std::collections::BTreeMap<usize, Vec<usize>> = Default::default();
+        for i in (0..n).filter(|&i| res[i].is_finite()) {
+            by_group.entry(groups[i]).or_default().push(i);
+        }
+        let mut mean = vec![f64::NAN; n];
+        let mut count = vec![0usize; n];
+        // Noise from neighbours in slip: r_{j+1} − r_j has variance 2s² plus the (small) change
+        // of the smooth part between them.
+        let (mut diffs, mut pairs) = (0.0, 0usize);
+        for idx in by_group.values_mut() {
+            idx.sort_by(|&a, &b| slip[a].total_cmp(&slip[b]));
+            for w in idx.windows(2) {
+                diffs += (res[w[1]] - res[w[0]]).powi(2);
+                pairs += 1;
+            }
+            let (mut lo, mut hi) = (0usize, 0usize);
+            for (k, &i) in idx.iter().enumerate() {
+                while slip[idx[lo]] < slip[i] - axis.smooth() {
+                    lo += 1;
+                }
+                hi = hi.max(k);
+                while hi + 1 < idx.len() && slip[idx[hi + 1]] <= slip[i] + axis.smooth() {
+                    hi += 1;
+                }
+                let window = &idx[lo..=hi];
+                mean[i] = window.iter().map(|&j| res[j]).sum::<f64>() / window.len() as f64;
+                count[i] = window.len();
+            }
+        }
+        let noise_var = if pairs == 0 { 0.0 } else { diffs / (2.0 * pairs as f64) };
+        let mut inputs = Vec::with_capacity(n);
+        let mut q = Vec::with_capacity(n);
+        for i in (0..n).filter(|&i| count[i] > 0) {
+            inputs.push(points[i].input);
+            q.push(mean[i] * mean[i] - noise_var / count[i] as f64);
+        }
+        FormError { inputs, q, axis, fz0_n, noise_var }
+    }
+
+    /// The pooled noise variance the smooth residuals were corrected for, channel units².
+    pub fn noise_var(&self) -> f64 {
+        self.noise_var
+    }
+
+    /// τ(x): the form error's standard deviation in the region around `x`; `None` when no point
+    /// lies in that region.
+    pub fn std_at(&self, x: &MfInput) -> Option<f64> {
+        self.over(std::slice::from_ref(x))[0].std
+    }
+
+    /// [`FormError::std_at`] at every one of `xs`, and whether each lies inside the tested
+    /// envelope (a point within load ±15 % Fz0, slip angle ±1°, slip ratio ±0.02, camber ±0.75°,
+    /// pressure ±20 kPa: the box of [`crate::accuracy::Support`]). The points are taken by load
+    /// case (load, camber, pressure), so a grid costs one pass over the data per load case.
+    pub fn over(&self, xs: &[MfInput]) -> Vec<Region> {
+        let sf = REGION_LOAD_FRACTION * self.fz0_n.max(1.0);
+        let sg = REGION_CAMBER_DEG.to_radians();
+        let mut out = vec![Region { std: None, tested: false }; xs.len()];
+        let mut cases: Vec<([f64; 3], Vec<usize>)> = Vec::new();
+        for (i, x) in xs.iter().enumerate() {
+            let key = [x.fz_n, x.gamma_rad, x.p_pa];
+            match cases.iter_mut().find(|(k, _)| *k == key) {
+                Some((_, v)) => v.push(i),
+                None => cases.push((key, vec![i])),
+            }
+        }
+        for ([fz, gamma, p], members) in cases {
+            let near: Vec<usize> = (0..self.inputs.len())
+                .filter(|&j| {
+                    let d = &self.inputs[j];
+                    (d.fz_n - fz).abs() <= sf
+                        && (d.gamma_rad - gamma).abs() <= sg
+                        && (d.p_pa - p).abs() <= REGION_PRESSURE_PA
+                })
+                .collect();
+            for i in members {
+                let x = &xs[i];
+                let slip = self.axis.of(x);
+                let (mut sum, mut n, mut tested) = (0.0, 0usize, false);
+                for &j in &near {
+                    let d = &self.inputs[j];
+                    if (self.axis.of(d) - slip).abs() <= self.axis.region() {
+                        sum += self.q[j];
+                        n += 1;
+                    }
+                    tested |= (d.alpha_rad - x.alpha_rad).abs() <= TESTED_SLIP_ANGLE_DEG.to_radians()
+                        && (d.kappa - x.kappa).abs() <= TESTED_SLIP_RATIO;
+                }
+                out[i] = Region { std: (n > 0).then(|| (sum / n as f64).max(0.0).sqrt()), tested };
+            }
+        }
+        out
+    }
+}
+
+/// The form error around one operating point.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Region {
+    /// τ, channel units; `None` without data in the region.
+    pub std: Option<f64>,
+    /// True inside the tested envelope.
+    pub tested: bool,
+}
+
+/// Half-width of the tested envelope's box in slip angle, deg ([`crate::accuracy::Support`]'s).
+const TESTED_SLIP_ANGLE_DEG: f64 = 1.0;
+/// Half-width of the tested envelope's box in slip ratio.
+const TESTED_SLIP_RATIO: f64 = 0.02;
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn sweep(group_bias: impl Fn(f64) -> f64, noise: &[f64]) -> (Vec<Point>, Vec<usize>, Vec<f64>) {
+        let mut pts = Vec::new();
+        let mut values = Vec::new();
+        for (i, e) in noise.iter().enumerate() {
+            let alpha_deg = -10.0 + 20.0 * i as f64 / (noise.len() - 1) as f64;
+            let input = MfInput {
+                fz_n: 4000.0,
+                kappa: 0.0,
+                alpha_rad: alpha_deg.to_radians(),
+                gamma_rad: 0.0,
+                phit_per_m: 0.0,
+                vx_mps: 16.0,
+                p_pa: 2e5,
+                omega_radps: 0.0,
+            };
+            pts.push(Point { input, measured: 0.0 });
+            values.push(group_bias(alpha_deg) + e);
+        }
+        let groups = vec![0; pts.len()];
+        (pts, groups, values)
+    }
+
+    /// Seeded white Gaussian noise of unit variance.
+    fn noise(n: usize) -> Vec<f64> {
+        use rand::SeedableRng;
+        use rand_distr::Distribution;
+        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(7);
+        let normal = rand_distr::Normal::new(0.0, 1.0).expect("a normal distribution");
+        (0..n).map(|_| normal.sample(&mut rng)).collect()
+    }
+
+    #[test]
+    fn white_noise_alone_gives_next_to_no_form_error() {
+        let (p, g, v) = sweep(|_| 0.0, &noise(2001));
+        let f = FormError::of(&p, &g, &v, SlipAxis::Angle, 4000.0);
+        assert!((f.noise_var() - 1.0).abs() < 0.1, "noise variance {}", f.noise_var());
+        let tau = f.std_at(&p[1000].input).expect("data in the region");
+        assert!(tau < 0.2, "τ {tau} from noise of σ 1");
+    }
+
+    #[test]
+    fn a_smooth_bias_is_found_at_its_size_under_the_noise() {
+        // A bias of 5 units under noise of 1: τ near 5 where it is, and none where the data are not.
+        let (p, g, v) = sweep(|_| 5.0, &noise(2001));
+        let f = FormError::of(&p, &g, &v, SlipAxis::Angle, 4000.0);
+        let tau = f.std_at(&p[1000].input).expect("data in the region");
+        assert!((tau - 5.0).abs() < 0.2, "τ {tau}");
+        let far = MfInput { gamma_rad: 4f64.to_radians(), ..p[1000].input };
+        assert_eq!(f.std_at(&far), None);
+    }
+}
