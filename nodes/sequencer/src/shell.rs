@@ -412,7 +412,7 @@ pub async fn run(mut node: RosNode, cfg: SequencerNodeConfig, shutdown: Shutdown
         // The final ProcedureState (COMPLETE, ABORTED, ESTOP) was just written: keep the
         // writers alive long enough for reliable delivery (and a repair) before the participant
         // goes, or the log may end without the state that says how the procedure ended.
-        tokio::time::sleep(Duration::from_millis(500)).await;
+        node.linger_for_repair().await;
     }
     Ok(())
 }
