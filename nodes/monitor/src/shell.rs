@@ -115,17 +115,18 @@ pub async fn run(mut node: RosNode, cfg: QualityNodeConfig, shutdown: Shutdown) 
     let mut states = Box::pin(states.async_stream());
     let mut models = Box::pin(models.async_stream());
     let mut watch = ModelWatch::new();
+    let publish_errors = node_runtime::PublishErrors::new();
     // The late joiner's view: the current verdicts at once.
-    let _ = rep_pub.publish(p.monitor.report(0.0));
+    publish_errors.check(SuiteTopic::QualityReport, rep_pub.publish(p.monitor.report(0.0)));
     let publish = |o: PipelineOutput, live: bool| {
         if live && let Err(e) = live_pub.publish(o.live) {
             tracing::warn!("channels/live publish: {e:?}");
         }
         for x in o.sweep_summaries {
-            let _ = sum_pub.publish(x);
+            publish_errors.check(SuiteTopic::SweepSummary, sum_pub.publish(x));
         }
         for d in &o.derived {
-            let _ = derived_pub.publish(d.to_msg());
+            publish_errors.check(SuiteTopic::Derived, derived_pub.publish(d.to_msg()));
             tracing::info!(
                 "{}: {} = {} {} (Fz {:.0} N, p {:.0} Pa)",
                 d.section,
@@ -140,10 +141,10 @@ pub async fn run(mut node: RosNode, cfg: QualityNodeConfig, shutdown: Shutdown) 
             tracing::warn!("{} {} at {:.1} s: {}", a.level, a.check, a.rig_time_s, a.message);
         }
         if let Some(r) = o.report {
-            let _ = rep_pub.publish(r);
+            publish_errors.check(SuiteTopic::QualityReport, rep_pub.publish(r));
         }
         if let Some(d) = o.diagnostics {
-            let _ = diag_pub.publish(d);
+            publish_errors.check(SuiteTopic::Diagnostics, diag_pub.publish(d));
         }
     };
     let (sample_topic, state_topic, model_topic) = (
@@ -177,7 +178,7 @@ pub async fn run(mut node: RosNode, cfg: QualityNodeConfig, shutdown: Shutdown) 
                             tracing::warn!("live model at {:.1} s: {}", e.rig_time_s, e.message);
                         }
                     }
-                    let _ = diag_pub.publish(o.diagnostics);
+                    publish_errors.check(SuiteTopic::Diagnostics, diag_pub.publish(o.diagnostics));
                 }
                 Some(Err(e)) => loss.on_read_error(&model_topic, &e),
                 None => break,

@@ -11,6 +11,7 @@
 //!   background spinner, typed publishers and subscriptions;
 //! - [`logging`]: `tracing` output with RustDDS's `log` records bridged in and quietened;
 //! - [`shutdown`]: SIGINT/SIGTERM turned into a cooperative shutdown signal;
+//! - [`publish`]: publish errors counted per topic and logged (never `let _`);
 //! - [`loss`]: per-writer loss and malformed-input accounting every subscriber keeps, with its
 //!   `/diagnostics` announcements.
 //!
@@ -20,6 +21,7 @@ pub mod config;
 pub mod logging;
 pub mod loss;
 pub mod node;
+pub mod publish;
 pub mod security;
 pub mod shutdown;
 pub mod topics;
@@ -27,6 +29,7 @@ pub mod topics;
 pub use config::{RuntimeConfig, RuntimeConfigError};
 pub use loss::{LossWatch, WriterTally};
 pub use node::{RosNode, RuntimeError};
+pub use publish::PublishErrors;
 pub use security::{SecurityConfig, SecurityConfigError};
 pub use shutdown::Shutdown;
 pub use topics::{Qos, SuiteTopic, TopicSpec};

@@ -252,6 +252,7 @@ pub async fn run(mut node: RosNode, cfg: SequencerNodeConfig, shutdown: Shutdown
         node.topic_name(SuiteTopic::ProcedureCommand),
     );
     let mut loss = LossWatch::new(node.name());
+    let publish_errors = node_runtime::PublishErrors::new();
     // Watchdog: checked every control cycle; armed by the first sample.
     let mut watchdog = tokio::time::interval(Duration::from_secs_f64(1.0 / cfg.core.control_rate_hz));
     watchdog.set_missed_tick_behavior(tokio::time::MissedTickBehavior::Delay);
@@ -261,10 +262,10 @@ pub async fn run(mut node: RosNode, cfg: SequencerNodeConfig, shutdown: Shutdown
     let handle = |out: crate::SequencerOutput, seq: &Sequencer| -> Result<bool, SequencerNodeError> {
         let rig_time_s = out.setpoint.as_ref().map(|sp| sp.header.stamp.as_secs_f64());
         if let Some(sp) = out.setpoint {
-            let _ = setpoint_pub.publish(sp);
+            publish_errors.check(SuiteTopic::RigSetpoint, setpoint_pub.publish(sp));
         }
         if let Some(st) = out.state {
-            let _ = state_pub.publish(st);
+            publish_errors.check(SuiteTopic::ProcedureState, state_pub.publish(st));
         }
         let statuses: Vec<_> =
             out.events.iter().filter_map(|ev| event_status(&node_name, ev, rig_time_s.unwrap_or(0.0))).collect();
@@ -276,7 +277,8 @@ pub async fn run(mut node: RosNode, cfg: SequencerNodeConfig, shutdown: Shutdown
                 stamp: tyre_msgs::builtin_interfaces::Time::from_secs_f64(rig_time_s.unwrap_or(0.0)),
                 frame_id: String::new(),
             };
-            let _ = diag_pub.publish(DiagnosticArray { header, status: statuses });
+            publish_errors
+                .check(SuiteTopic::Diagnostics, diag_pub.publish(DiagnosticArray { header, status: statuses }));
         }
         let mut done = false;
         for ev in &out.events {
@@ -328,7 +330,7 @@ pub async fn run(mut node: RosNode, cfg: SequencerNodeConfig, shutdown: Shutdown
                     loss.on_message(&model_topic, &info, None);
                     if let Err(e) = plan_model.on_model(&msg) {
                         tracing::error!("{e}; the planner keeps the previous model");
-                        let _ = diag_pub.publish(plan_status(&node_name, DiagnosticStatus::ERROR, e.to_string(), now_s));
+                        publish_errors.check(SuiteTopic::Diagnostics, diag_pub.publish(plan_status(&node_name, DiagnosticStatus::ERROR, e.to_string(), now_s)));
                     }
                 }
                 Some(Err(e)) => loss.on_read_error(&model_topic, &e),
@@ -383,7 +385,10 @@ pub async fn run(mut node: RosNode, cfg: SequencerNodeConfig, shutdown: Shutdown
                 plan_wait_since = None;
                 if let Some(why) = stale {
                     tracing::warn!("adaptive plan: {why}");
-                    let _ = diag_pub.publish(plan_status(&node_name, DiagnosticStatus::WARN, why, now_s));
+                    publish_errors.check(
+                        SuiteTopic::Diagnostics,
+                        diag_pub.publish(plan_status(&node_name, DiagnosticStatus::WARN, why, now_s)),
+                    );
                 }
                 let planner_cfg = seq.planner().map(|p| *p.config()).unwrap_or_default();
                 let decided_with = model.and(plan_model.latest());
@@ -394,7 +399,7 @@ pub async fn run(mut node: RosNode, cfg: SequencerNodeConfig, shutdown: Shutdown
                 for ev in &out.events {
                     if let Some(d) = decision_status(ev, now_s, decided_with) {
                         tracing::info!("adaptive plan: {}", d.status.first().map_or("", |s| s.message.as_str()));
-                        let _ = diag_pub.publish(d);
+                        publish_errors.check(SuiteTopic::Diagnostics, diag_pub.publish(d));
                     }
                 }
                 observe(&out, &mut plan_model);

@@ -32,6 +32,7 @@ pub async fn run(mut node: RosNode, cfg: ThermalConfig, shutdown: Shutdown) -> R
     let (sample_topic, state_topic) =
         (node.topic_name(SuiteTopic::RigSample), node.topic_name(SuiteTopic::ProcedureState));
     let mut loss = LossWatch::new(node.name());
+    let publish_errors = node_runtime::PublishErrors::new();
     let mut stamp = tyre_msgs::builtin_interfaces::Time::default();
     loop {
         tokio::select! {
@@ -62,7 +63,7 @@ pub async fn run(mut node: RosNode, cfg: ThermalConfig, shutdown: Shutdown) -> R
                             hardware_id: "tyre tread temperature".into(),
                             values: vec![KeyValue { key: "rig_time_s".into(), value: format!("{:.3}", a.rig_time_s) }],
                         }).collect();
-                        let _ = diag_pub.publish(DiagnosticArray { header: out.state.header.clone(), status });
+                        publish_errors.check(SuiteTopic::Diagnostics, diag_pub.publish(DiagnosticArray { header: out.state.header.clone(), status }));
                     }
                 }
                 Some(Err(e)) => loss.on_read_error(&sample_topic, &e),

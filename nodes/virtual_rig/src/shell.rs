@@ -181,6 +181,7 @@ pub async fn run(mut node: RosNode, cfg: VirtualRigNodeConfig, shutdown: Shutdow
     let setpoint_topic = node.topic_name(SuiteTopic::RigSetpoint);
     let node_name = node.name().to_owned();
     let mut loss = LossWatch::new(node.name());
+    let publish_errors = node_runtime::PublishErrors::new();
     // The watchdog: the last setpoint, when it came, and whether the rig holds by itself.
     let mut last_setpoint: Option<(RigSetpoint, std::time::Instant)> = None;
     let mut holding = false;
@@ -197,8 +198,11 @@ pub async fn run(mut node: RosNode, cfg: VirtualRigNodeConfig, shutdown: Shutdow
             hardware_id: "virtual rig".into(),
             values: Vec::new(),
         };
-        let _ = diagnostics
-            .publish(DiagnosticArray { header: Header { stamp, frame_id: String::new() }, status: vec![status] });
+        publish_errors.check(
+            SuiteTopic::Diagnostics,
+            diagnostics
+                .publish(DiagnosticArray { header: Header { stamp, frame_id: String::new() }, status: vec![status] }),
+        );
     };
     // A reliable writer whose send window is full (a reader far behind; one that stopped
     // acknowledging altogether, killed or stopped, is no longer waited for after 2 s:
@@ -223,7 +227,7 @@ pub async fn run(mut node: RosNode, cfg: VirtualRigNodeConfig, shutdown: Shutdow
         } else {
             published.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
         }
-        let _ = clock.publish(Clock { clock: s.header.stamp });
+        publish_errors.check(SuiteTopic::Clock, clock.publish(Clock { clock: s.header.stamp }));
         Ok(())
     };
     // The rig's own count of its samples, on `/diagnostics` (see the module docs).
