@@ -28,7 +28,7 @@ pub mod topics;
 
 pub use config::{RuntimeConfig, RuntimeConfigError};
 pub use loss::{LossWatch, WriterTally};
-pub use node::{RosNode, RuntimeError};
+pub use node::{FLUSH_DEADLINE, RosNode, RuntimeError};
 pub use publish::PublishErrors;
 pub use security::{SecurityConfig, SecurityConfigError};
 pub use shutdown::Shutdown;

@@ -23,12 +23,15 @@ pub enum RuntimeError {
     WrongType { node: String, topic: String, expected: String, requested: String },
 }
 
-/// How long [`RosNode::linger_for_repair`] keeps a stopping node's writers alive. A reader that
-/// lost the last datagram asks for it only once it has processed the writer's next heartbeat,
-/// and a reader on a loaded host can be seconds behind: on the two-host test (2-core machine,
-/// load 3) host B's recorder logged the sequencer's states until 2.0 s after the sequencer had
-/// exited, and never its last one (COMPLETE), which a 0.5 s linger had not stayed to repair.
-pub const REPAIR_LINGER: std::time::Duration = std::time::Duration::from_secs(3);
+/// How long [`RosNode::flush_before_exit`] waits at most for a stopping node's readers to
+/// acknowledge its last messages. A reader that lost the last datagram asks for it only once it
+/// has processed the writer's next heartbeat, and a reader on a loaded host can be seconds
+/// behind: on the two-host test (2-core machine, load 3) host B's recorder logged the
+/// sequencer's states until 2.0 s after the sequencer had exited and never its last one
+/// (COMPLETE); a fixed 3 s linger missed it again on CI. Waiting for the acknowledgement ends as
+/// soon as every reader has it; only a reader that never answers (killed, its lease not yet
+/// run out) costs the whole wait.
+pub const FLUSH_DEADLINE: std::time::Duration = std::time::Duration::from_secs(15);
 
 /// A suite node's DDS presence. Create it inside a tokio runtime: the ROS 2 spinner (discovery
 /// graph, parameter events) runs as a task on it.
@@ -38,7 +41,7 @@ pub struct RosNode {
     namespace: String,
     domain_id: u16,
     // The context owns the DomainParticipant; keep it alive as long as the node.
-    _context: Context,
+    context: Context,
 }
 
 impl std::fmt::Debug for RosNode {
@@ -93,7 +96,7 @@ impl RosNode {
         }
         let guid = rustdds_guid(&context);
         tracing::debug!(node = name, namespace = %cfg.namespace, domain_id, participant = ?guid.prefix, "node up");
-        Ok(Self { node, name: name.to_owned(), namespace: cfg.namespace.clone(), domain_id, _context: context })
+        Ok(Self { node, name: name.to_owned(), namespace: cfg.namespace.clone(), domain_id, context })
     }
 
     pub fn name(&self) -> &str {
@@ -108,13 +111,42 @@ impl RosNode {
         self.domain_id
     }
 
-    /// Keeps the participant up for [`REPAIR_LINGER`] after a node's last publication. A reliable
-    /// writer repairs a lost datagram only while its participant lives (a reader that missed the
-    /// last one asks for it after the writer's next heartbeat, every 100 ms while a reader is
-    /// behind); a node that exits right after its final message (the rig's closing count of its
-    /// samples) would otherwise leave a reader with whatever the network dropped last.
-    pub async fn linger_for_repair(&self) {
-        tokio::time::sleep(REPAIR_LINGER).await;
+    /// Waits until every matched reliable reader of `writers` (this node's publishers' GUIDs)
+    /// has acknowledged everything they wrote, for at most [`FLUSH_DEADLINE`]; for a node about
+    /// to exit right after its final messages (the sequencer's COMPLETE, the rig's closing count
+    /// of its samples). A reliable writer repairs a lost datagram only while its participant
+    /// lives, and readers the writer stopped waiting for in flow control (silent for 2 s,
+    /// vendor/rustdds PATCHES.md 3) are waited for too (PATCHES.md 4). Returns how many writers
+    /// were not acknowledged in time, and logs them.
+    pub async fn flush_before_exit(&self, writers: &[(SuiteTopic, ros2_client::dds::rustdds::GUID)]) -> usize {
+        let participant = self.context.domain_participant();
+        let writers: Vec<_> = writers.iter().map(|(topic, guid)| (self.topic_name(*topic), *guid)).collect();
+        let node = self.name.clone();
+        let waited = tokio::task::spawn_blocking(move || {
+            let deadline = std::time::Instant::now() + FLUSH_DEADLINE;
+            let mut unacknowledged = 0;
+            for (topic, guid) in writers {
+                let left = deadline.saturating_duration_since(std::time::Instant::now());
+                match participant.wait_for_acknowledgments(guid, left) {
+                    Some(true) => {}
+                    Some(false) => {
+                        unacknowledged += 1;
+                        tracing::warn!(
+                            node = %node,
+                            "{topic}: not every reader acknowledged the last messages within {} s; exiting anyway",
+                            FLUSH_DEADLINE.as_secs()
+                        );
+                    }
+                    None => tracing::warn!(node = %node, "{topic}: no such writer to flush"),
+                }
+            }
+            unacknowledged
+        })
+        .await;
+        waited.unwrap_or_else(|e| {
+            tracing::warn!(node = %self.name, "flush before exit failed: {e}");
+            0
+        })
     }
 
     /// Full ROS name of a suite topic for this node's namespace.

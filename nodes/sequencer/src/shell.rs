@@ -414,10 +414,15 @@ pub async fn run(mut node: RosNode, cfg: SequencerNodeConfig, shutdown: Shutdown
         loss.announce(&diag_pub, tyre_msgs::builtin_interfaces::Time::from_secs_f64(now_s));
     }
     if cfg.exit_when_done {
-        // The final ProcedureState (COMPLETE, ABORTED, ESTOP) was just written: keep the
-        // writers alive long enough for reliable delivery (and a repair) before the participant
-        // goes, or the log may end without the state that says how the procedure ended.
-        node.linger_for_repair().await;
+        // The final ProcedureState (COMPLETE, ABORTED, ESTOP) was just written: the participant
+        // stays until every reader has it (or a repair of it), or the log may end without the
+        // state that says how the procedure ended.
+        node.flush_before_exit(&[
+            (SuiteTopic::ProcedureState, state_pub.guid()),
+            (SuiteTopic::RigSetpoint, setpoint_pub.guid()),
+            (SuiteTopic::Diagnostics, diag_pub.guid()),
+        ])
+        .await;
     }
     Ok(())
 }

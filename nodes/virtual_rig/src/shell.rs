@@ -368,8 +368,13 @@ pub async fn run(mut node: RosNode, cfg: VirtualRigNodeConfig, shutdown: Shutdow
     }
     if let Some(t) = last_stamp {
         announce_tally(t);
-        // The closing count is what a recorder's loss record measures its missing tail by.
-        node.linger_for_repair().await;
+        // The closing count is what a recorder's loss record measures its missing tail by: the
+        // participant stays until every reader has it and the last samples.
+        node.flush_before_exit(&[
+            (SuiteTopic::Diagnostics, diagnostics.guid()),
+            (SuiteTopic::RigSample, samples.guid()),
+        ])
+        .await;
     }
     Ok(())
 }

@@ -47,6 +47,7 @@ use crate::{
     dp_event_loop::{DPEventLoop, DomainInfo, EventLoopCommand},
     reader::*,
     writer::WriterIngredients,
+    writer_send_buffer::{WeakWriterSendBuffer, WriterSendBuffer},
   },
   structure::{dds_cache::DDSCache, entity::RTPSEntity, guid::*, locator::Locator},
   StatusEvented,
@@ -658,6 +659,31 @@ impl DomainParticipant {
     self.dpi.lock().unwrap().dds_cache()
   }
 
+  // tyrerig patch (PATCHES.md 4): a DataWriter's send buffer, registered as
+  // the writer is made.
+  pub(crate) fn register_writer_send_buffer(&self, guid: GUID, send_buffer: &WriterSendBuffer) {
+    let registry = self.dpi.lock().unwrap().writer_send_buffers();
+    let mut registry = registry.lock().unwrap();
+    registry.retain(|_, weak| weak.upgrade().is_some());
+    registry.insert(guid, send_buffer.downgrade());
+  }
+
+  /// tyrerig patch (PATCHES.md 4): waits until every matched reliable reader
+  /// of this participant's DataWriter `writer` has acknowledged everything it
+  /// has written, or `max_wait` elapses. Unlike
+  /// [`DataWriter::wait_for_acknowledgments`](crate::no_key::DataWriter::wait_for_acknowledgments),
+  /// readers the writer no longer waits for in flow control (silent for
+  /// `reader_inactive_after`) count too: this is for a writer about to go,
+  /// whose last samples a reader far behind would otherwise ask to be repaired
+  /// only after the writer is gone. Blocks the calling thread. `None` if this
+  /// participant has no such writer; else `Some(true)` when acknowledged (or
+  /// there is no reliable reader), `Some(false)` on the timeout.
+  pub fn wait_for_acknowledgments(&self, writer: GUID, max_wait: Duration) -> Option<bool> {
+    let registry = self.dpi.lock().unwrap().writer_send_buffers();
+    let buffer = registry.lock().unwrap().get(&writer).and_then(WeakWriterSendBuffer::upgrade)?;
+    Some(buffer.wait_for_all_acked(max_wait))
+  }
+
   #[cfg(feature = "security")] // just to avoid warning
   pub(crate) fn qos(&self) -> QosPolicies {
     self.dpi.lock().unwrap().qos()
@@ -1107,6 +1133,11 @@ impl DomainParticipantDisc {
     self.dpi.dds_cache()
   }
 
+  // tyrerig patch (PATCHES.md 4)
+  pub(crate) fn writer_send_buffers(&self) -> Arc<Mutex<HashMap<GUID, WeakWriterSendBuffer>>> {
+    self.dpi.writer_send_buffers()
+  }
+
   pub(crate) fn only_networks(&self) -> Option<Arc<[IpAddr]>> {
     self.dpi.only_networks()
   }
@@ -1220,6 +1251,11 @@ pub(crate) struct DomainParticipantInner {
   security_plugins_handle: Option<SecurityPluginsHandle>,
 
   only_networks: Option<Arc<[IpAddr]>>,
+
+  // tyrerig patch (PATCHES.md 4): this participant's DataWriters' send buffers
+  // (weak: a dropped writer's buffer goes with it), for
+  // `DomainParticipant::wait_for_acknowledgments`.
+  writer_send_buffers: Arc<Mutex<HashMap<GUID, WeakWriterSendBuffer>>>,
 }
 
 impl Drop for DomainParticipantInner {
@@ -1486,6 +1522,7 @@ impl DomainParticipantInner {
       remove_writer_sender,
       writer_ready,
       dds_cache,
+      writer_send_buffers: Arc::new(Mutex::new(HashMap::new())),
       discovery_db,
       discovery_db_event_receiver,
       status_receiver,
@@ -1497,6 +1534,11 @@ impl DomainParticipantInner {
 
   pub fn dds_cache(&self) -> Arc<RwLock<DDSCache>> {
     self.dds_cache.clone()
+  }
+
+  // tyrerig patch (PATCHES.md 4)
+  pub(crate) fn writer_send_buffers(&self) -> Arc<Mutex<HashMap<GUID, WeakWriterSendBuffer>>> {
+    self.writer_send_buffers.clone()
   }
 
   pub(crate) fn only_networks(&self) -> Option<Arc<[IpAddr]>> {

@@ -608,6 +608,10 @@ impl InnerPublisher {
       }
     }
 
+    // tyrerig patch (PATCHES.md 4): so that the participant can wait for its
+    // readers' acknowledgements before the writer goes.
+    dp.register_writer_send_buffer(guid, &send_buffer);
+
     // Construct the data writer
     let data_writer = WithKeyDataWriter::<D, SA>::new(
       outer.clone(),

@@ -62,6 +62,13 @@ pub const HEARTBEAT_PERIOD_FAST: crate::structure::duration::Duration =
 // participant with `DomainParticipantBuilder::reader_inactive_after`.
 pub const READER_INACTIVE_AFTER_DEFAULT: Duration = Duration::from_secs(2);
 
+// tyrerig patch (PATCHES.md 4): how long a reliable reader may have sent no
+// ACKNACK and still be waited for by
+// `DomainParticipant::wait_for_acknowledgments` (a writer about to go away). A
+// reader seconds behind on a loaded host answers heartbeats late but answers;
+// one silent this long is taken for dead (killed, its lease not yet run out).
+pub const FLUSH_SILENCE_LIMIT: Duration = Duration::from_secs(6);
+
 // Fallback upper bound on the number of CacheChanges a Writer retains in its
 // history when the Writer QoS does not specify ResourceLimits.max_samples. This
 // is only a memory-safety backstop: for reliable Writers, samples that matched

@@ -1085,6 +1085,8 @@ impl Writer {
     // send window.
     if self.check_reader_activity(last_change) {
       self.refresh_acked_frontier();
+    } else {
+      self.refresh_all_acked_frontier();
     }
 
     if self
@@ -1390,6 +1392,34 @@ impl Writer {
     // tyrerig patch: inactive readers do not hold the window.
     let frontier = self.active_acked_frontier(None);
     self.send_buffer.set_acked_frontier(frontier);
+    self.refresh_all_acked_frontier();
+  }
+
+  // tyrerig patch (PATCHES.md 4): the frontier a writer about to go away waits
+  // on: every matched reliable reader that is active or was heard from within
+  // `FLUSH_SILENCE_LIMIT` (one far behind is inactive but still answering
+  // heartbeats, late; one that has said nothing for that long is taken for
+  // dead, as its lease has not yet told). Refreshed at every heartbeat tick,
+  // so that a reader falls out of it as its silence grows.
+  fn refresh_all_acked_frontier(&self) {
+    if self.like_stateless {
+      self.send_buffer.set_all_acked_frontier(None);
+      return;
+    }
+    let now = std::time::Instant::now();
+    let all = self
+      .readers
+      .values()
+      .filter(|rp| rp.qos().is_reliable())
+      .filter(|rp| {
+        rp.is_active()
+          || rp
+            .last_heard
+            .is_some_and(|h| now.saturating_duration_since(h) < crate::rtps::constant::FLUSH_SILENCE_LIMIT)
+      })
+      .map(RtpsReaderProxy::acked_up_to_before)
+      .min();
+    self.send_buffer.set_all_acked_frontier(all);
   }
 
   // tyrerig patch: the smallest `all_acked_before` over the matched reliable

@@ -46,6 +46,11 @@ struct Inner {
   // Maintained by the Writer (event loop) via `set_acked_frontier`.
   acked_before: SequenceNumber,
   reliable_readers_present: bool,
+  // tyrerig patch (PATCHES.md 4): the acknowledgement frontier over every
+  // matched reliable reader, the inactive ones too (`None`: no reliable
+  // reader). `acked_before` leaves inactive readers out so that they do not
+  // hold the window; a writer about to go away waits on this one instead.
+  all_acked_before: Option<SequenceNumber>,
 
   // nonblocking-transmit: the unsent backlog limit. The Writer advances
   // `sent_frontier` as it actually transmits samples; when the network socket
@@ -106,6 +111,18 @@ pub(crate) struct WriterSendBuffer {
   shared: Arc<Shared>,
 }
 
+/// tyrerig patch (PATCHES.md 4): see [`WriterSendBuffer::downgrade`].
+#[derive(Clone)]
+pub(crate) struct WeakWriterSendBuffer {
+  shared: std::sync::Weak<Shared>,
+}
+
+impl WeakWriterSendBuffer {
+  pub fn upgrade(&self) -> Option<WriterSendBuffer> {
+    self.shared.upgrade().map(|shared| WriterSendBuffer { shared })
+  }
+}
+
 impl WriterSendBuffer {
   #[allow(clippy::too_many_arguments)]
   pub fn new(
@@ -127,6 +144,7 @@ impl WriterSendBuffer {
           window_limit: window_limit.max(1),
           acked_before: SequenceNumber::new(1),
           reliable_readers_present: false,
+          all_acked_before: None,
           backlog_limit: backlog_limit.max(1),
           sent_frontier: SequenceNumber::new(0),
           max_retain: max_retain.max(1),
@@ -421,6 +439,50 @@ impl WriterSendBuffer {
       let (guard, _to) = shared.progress.wait_timeout(inner, deadline - now).unwrap();
       inner = guard;
     }
+  }
+
+  /// tyrerig patch (PATCHES.md 4): sets the frontier over every matched
+  /// reliable reader, inactive ones included (`None`: there is none).
+  pub fn set_all_acked_frontier(&self, all_acked_before: Option<SequenceNumber>) {
+    let shared = &*self.shared;
+    let mut inner = shared.inner.lock().unwrap();
+    if inner.all_acked_before != all_acked_before {
+      inner.all_acked_before = all_acked_before;
+      Self::wake_all(&mut inner, &shared.progress);
+    }
+  }
+
+  /// tyrerig patch (PATCHES.md 4): waits until every matched reliable reader,
+  /// inactive ones included, has acknowledged everything written so far, or
+  /// `max_wait` elapses. Returns `true` if acknowledged (or there is no
+  /// reliable reader). For a writer that is about to be deleted: a reader far
+  /// behind (made inactive so that it does not hold the window) still gets
+  /// the last samples, which it may ask to be repaired only after the writer
+  /// would otherwise be gone.
+  pub fn wait_for_all_acked(&self, max_wait: StdDuration) -> bool {
+    let shared = &*self.shared;
+    let mut inner = shared.inner.lock().unwrap();
+    let target = inner.last_seq;
+    let deadline = Instant::now() + max_wait;
+    loop {
+      match inner.all_acked_before {
+        None => return true,
+        Some(sn) if sn > target => return true,
+        Some(_) => {}
+      }
+      let now = Instant::now();
+      if now >= deadline {
+        return false;
+      }
+      let (guard, _to) = shared.progress.wait_timeout(inner, deadline - now).unwrap();
+      inner = guard;
+    }
+  }
+
+  /// tyrerig patch (PATCHES.md 4): a handle that does not keep the buffer
+  /// alive, for the participant's registry of its writers.
+  pub fn downgrade(&self) -> WeakWriterSendBuffer {
+    WeakWriterSendBuffer { shared: Arc::downgrade(&self.shared) }
   }
 
   /// Register `waker` to be notified when the acknowledgement frontier advances
