@@ -393,7 +393,14 @@ impl PartialOut {
     /// v − E[v | x] at every point.
     pub fn residualized(&self, values: &[f64]) -> Vec<f64> {
         let wrapped: Vec<[f64; 1]> = values.iter().map(|&v| [v]).collect();
-        (0..values.len()).map(|k| values[k] - self.expected_at(&wrapped, k)[0]).collect()
+        (0..values.len()).map(|k| self.residual_at(&wrapped, k)[0]).collect()
+    }
+
+    /// v − E[v | x] at point `k` (a non-finite value counts as 0, as in [`Self::expected_at`]).
+    pub fn residual_at<const M: usize>(&self, values: &[[f64; M]], k: usize) -> [f64; M] {
+        let e = self.expected_at(values, k);
+        let v = values.get(k).copied().unwrap_or([0.0; M]);
+        std::array::from_fn(|m| if v[m].is_finite() { v[m] - e[m] } else { -e[m] })
     }
 }
 

@@ -119,10 +119,10 @@ impl Design {
     /// Row of the design at point `k`, channel `ch`.
     fn row(&self, lin: &Linearization, k: usize, ch: usize, out: &mut [f64]) {
         for (o, c) in out.iter_mut().zip(&self.cols) {
-            *o = match c.term.factor.scaling_index() {
-                Some(f) => lin.sens[k][f][ch] * c.phi[k],
-                None if ch == CH_RL => 1e-3 * c.phi[k],
-                None => 0.0,
+            *o = if c.term.factor == state::Factor::Radius {
+                if ch == CH_RL { 1e-3 * c.phi[k] } else { 0.0 }
+            } else {
+                c.term.factor.scaling_indices().iter().map(|&f| lin.sens[k][f][ch]).sum::<f64>() * c.phi[k]
             };
         }
     }
@@ -226,6 +226,89 @@ pub fn determined_columns(
     (0..n.b.len())
         .filter(|&i| design.cols[i].slot == slot && n.a[(i, i)] > 2.0 * design.cols[i].prior_precision)
         .count()
+}
+
+/// Least share of a term's state variation (weighted by how much its factor moves the
+/// prediction at each point) that must be left at a fixed operating point for the term to be
+/// fitted with the operating point's share taken out ([`crate::form::PartialOut`]). Below it
+/// the state is as good as a function of the operating point where the term acts: fitted on
+/// the little that is left and applied to the whole state, its coefficient is wild (benchmark
+/// of real-like TTC runs: a specimen's λμx, seen on the drive/brake run's tyre only, came out
+/// at e^191 and the final model's FX RMS at 1,622 N).
+pub const MIN_PARTIALLED_SHARE: f64 = 0.1;
+
+/// The design without the columns of `slot` whose state, where their factor acts, is
+/// (nearly) fixed by the operating point ([`MIN_PARTIALLED_SHARE`]). Only where `ev` partials
+/// the effect out; otherwise the design as it is.
+pub fn without_aliased(
+    ev: &Evaluator<'_>,
+    design: Design,
+    lin: &Linearization,
+    sigma: &[f64; 4],
+    slot: usize,
+) -> Design {
+    let Some(effect) = design.effects.get(slot).map(|e| e.effect) else { return design };
+    if !ev.partialled(effect) {
+        return design;
+    }
+    let choice = design.effects[slot].parsed().choice;
+    let mut raw_cache: Vec<(u8, Vec<f64>)> = Vec::new();
+    let keep: Vec<bool> = design
+        .cols
+        .iter()
+        .map(|c| {
+            if c.slot != slot {
+                return true;
+            }
+            let raw = match raw_cache.iter().find(|(b, _)| *b == c.term.basis) {
+                Some((_, v)) => v.clone(),
+                None => {
+                    let v = ev.raw_basis_at_points(effect, c.term.basis, &choice);
+                    raw_cache.push((c.term.basis, v.clone()));
+                    v
+                }
+            };
+            // Weight of each point: the factor's pull on the channels, in noise units.
+            let weight = |k: usize| -> f64 {
+                if c.term.factor == state::Factor::Radius {
+                    f64::from(u8::from(lin.pred[k][CH_RL].is_finite()))
+                } else {
+                    (0..4)
+                        .map(|ch| {
+                            let s: f64 = c.term.factor.scaling_indices().iter().map(|&f| lin.sens[k][f][ch]).sum();
+                            (s / sigma[ch]).powi(2)
+                        })
+                        .filter(|v| v.is_finite())
+                        .sum()
+                }
+            };
+            // Only the points where the factor acts at all (a hundredth of its largest pull):
+            // λμx barely moves FX at zero slip ratio, and those points must not lend it a
+            // state variation it cannot show.
+            let w: Vec<f64> = (0..raw.len()).map(weight).collect();
+            let w_max = w.iter().copied().fold(0.0, f64::max);
+            let acts = |k: usize| w[k] > 0.01 * w_max && raw[k].is_finite() && c.phi[k].is_finite();
+            let (mut sw, mut swx, mut swp) = (0.0, 0.0, 0.0);
+            for k in (0..raw.len()).filter(|&k| acts(k)) {
+                sw += w[k];
+                swx += w[k] * raw[k];
+                swp += w[k] * c.phi[k];
+            }
+            if sw <= 0.0 {
+                return false;
+            }
+            // Both about their means: a level left by the smoother's shrinkage is no variation.
+            let (mean, mean_left) = (swx / sw, swp / sw);
+            let (mut raw_var, mut left_var) = (0.0, 0.0);
+            for k in (0..raw.len()).filter(|&k| acts(k)) {
+                raw_var += w[k] * (raw[k] - mean).powi(2);
+                left_var += w[k] * (c.phi[k] - mean_left).powi(2);
+            }
+            raw_var > 1e-12 * sw && left_var >= MIN_PARTIALLED_SHARE * raw_var
+        })
+        .collect();
+    let cols = design.cols.into_iter().zip(keep).filter(|(_, k)| *k).map(|(c, _)| c).collect();
+    Design { effects: design.effects, cols }
 }
 
 /// What fitting a state design on all sweeps gives.
