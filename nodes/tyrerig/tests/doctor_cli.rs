@@ -182,7 +182,8 @@ fn bench_case(id: &str, work: &str) -> (Vec<String>, serde_json::Value) {
 }
 
 /// Issue 30: real runs relax (FY lags the slip angle), and a thermal effect hidden in them must
-/// still be named, beside `transient`. TTC-style runs of the brush race tyre with the rig's
+/// still be named, beside `transient` — the injector's, and an outsider's hidden in the files
+/// (forces scaled, radius untouched); on the runs as they are, `transient` alone. TTC-style runs of the brush race tyre with the rig's
 /// relaxation on, a thermal effect drawn by the injector at twice its typical size (seed 1: an
 /// asymmetric μ(T) with an optimum at 57 °C, a 96 s bulk lag), exported to TTC files. Once
 /// `thermal` was named, `transient` used to be scored against a form error made for the state
@@ -238,4 +239,90 @@ fn thermal_hidden_in_relaxing_ttc_runs_is_named_beside_transient() {
         serde_json::from_str(&std::fs::read_to_string(out.join("doctor.json")).expect("doctor.json")).expect("parses");
     let names = named(&d);
     assert_eq!(names, ["thermal", "transient"], "named {names:?}; {}", d["stop_reason"]);
+
+    // The same clean runs with a thermal grip factor hidden as an outsider hides one in real
+    // runs' files: every force (FX, FY, MZ and the normalised NFX, NFY) of the `.dat` times a
+    // factor of the tread's bulk temperature (the lasers' mean through a 60 s lag), the loaded
+    // radius left alone; an asymmetric optimum at 50 °C, 17 % less grip at 80 °C with a power
+    // of 1.6 on the hot side, a quadratic 12 % at 20 °C on the cold side, at most 28 %. Not
+    // `tyrerig inject`'s form and not the doctor's.
+    let mut hidden_dat = Vec::new();
+    for c in &clean {
+        let mut export = os(&["export", "ttc"]);
+        export.push(c.into());
+        tyrerig(export);
+        let dat = c.with_extension("dat");
+        let out = c.with_extension("outsider.dat");
+        hide_outsider_thermal(&dat, &out);
+        hidden_dat.push(out);
+    }
+    let out = dir.join("doctor_outsider");
+    let mut doctor = os(&["doctor"]);
+    doctor.extend(hidden_dat.iter().map(OsString::from));
+    doctor.extend(os(&["--fit", "--skip-stage", "mx", "--out"]));
+    doctor.push(out.clone().into());
+    tyrerig(doctor);
+    let d: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("doctor.json")).expect("doctor.json")).expect("parses");
+    let names = named(&d);
+    assert_eq!(names, ["transient", "thermal"], "named {names:?}; {}", d["stop_reason"]);
+    let thermal = d["effects"].as_array().expect("effects").iter().find(|e| e["effect"] == "thermal").expect("thermal");
+    let (before, after) = (
+        thermal["rms_before_heldout"].as_f64().unwrap_or(0.0),
+        thermal["rms_after_heldout"].as_f64().unwrap_or(f64::MAX),
+    );
+    assert!(after < 0.7 * before, "thermal's region, held-out: {before} -> {after}");
+
+    // The control: the same runs as they are (the rig's relaxation, no grip effect of heat).
+    let out = dir.join("doctor_clean");
+    let mut doctor = os(&["doctor"]);
+    doctor.extend(clean.iter().map(|c| OsString::from(c.with_extension("dat"))));
+    doctor.extend(os(&["--fit", "--skip-stage", "mx", "--out"]));
+    doctor.push(out.clone().into());
+    tyrerig(doctor);
+    let d: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("doctor.json")).expect("doctor.json")).expect("parses");
+    let names = named(&d);
+    assert_eq!(names, ["transient"], "named {names:?} on the runs as they are; {}", d["stop_reason"]);
+}
+
+/// Scales the forces of a TTC `.dat` by a grip factor of the lagged mean tread temperature
+/// (see the test above); the loaded radius and everything else unchanged.
+fn hide_outsider_thermal(input: &std::path::Path, output: &std::path::Path) {
+    let text = std::fs::read_to_string(input).expect("exported .dat");
+    let mut lines = text.lines();
+    let (title, names, units) =
+        (lines.next().expect("title"), lines.next().expect("names"), lines.next().expect("units"));
+    let col = |n: &str| names.split('\t').position(|c| c == n).unwrap_or_else(|| panic!("no {n} in {names}"));
+    let (et, temps) = (col("ET"), [col("TSTI"), col("TSTC"), col("TSTO")]);
+    let forces: Vec<usize> = ["FX", "FY", "MZ", "NFX", "NFY"].iter().map(|n| col(n)).collect();
+    let factor = |t: f64| {
+        let loss = if t >= 50.0 { 0.17 * ((t - 50.0) / 30.0).powf(1.6) } else { 0.12 * ((50.0 - t) / 30.0).powi(2) };
+        1.0 - loss.min(0.28)
+    };
+    let mut out = format!("{title}\n{names}\n{units}\n");
+    let (mut bulk, mut last_t) = (f64::NAN, 0.0);
+    for line in lines.filter(|l| !l.trim().is_empty()) {
+        let mut v: Vec<String> = line.split('\t').map(str::to_owned).collect();
+        let num = |v: &[String], i: usize| v[i].parse::<f64>().unwrap_or(f64::NAN);
+        let t = num(&v, et);
+        let ts: Vec<f64> = temps.iter().map(|&i| num(&v, i)).filter(|x| x.is_finite()).collect();
+        let surface = ts.iter().sum::<f64>() / ts.len().max(1) as f64;
+        if !bulk.is_finite() {
+            bulk = surface;
+        } else if surface.is_finite() {
+            bulk += (1.0 - (-(t - last_t).max(0.0) / 60.0).exp()) * (surface - bulk);
+        }
+        last_t = t;
+        let g = if bulk.is_finite() { factor(bulk) } else { 1.0 };
+        for &i in &forces {
+            let x = num(&v, i);
+            if x.is_finite() {
+                v[i] = format!("{:.6}", x * g);
+            }
+        }
+        out.push_str(&v.join("\t"));
+        out.push('\n');
+    }
+    std::fs::write(output, out).expect("write the hidden .dat");
 }
