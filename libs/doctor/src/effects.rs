@@ -98,7 +98,7 @@ impl Effect {
 
     /// Parses a name.
     pub fn parse(s: &str) -> Option<Effect> {
-        Effect::ALL.into_iter().find(|e| e.name() == s)
+        Effect::ALL.into_iter().chain([Effect::Rebase]).find(|e| e.name() == s)
     }
 
     /// The variable the effect's signature is plotted against, with its unit.

@@ -4,7 +4,7 @@
 //! ```text
 //! [TYRERIG_EXTENSIONS]
 //! $ Added by `tyrerig doctor` (docs/doctor.md). MF-Tyre 6.1 readers ignore this section.
-//! FORMAT_VERSION            = 4
+//! FORMAT_VERSION            = 5
 //! EFFECTS                   = 'thermal,wear'
 //! THERMAL_SOURCE            = 0       $ 0: grip temperature (quiet, flash fitted out); 1: laser mean
 //! THERMAL_LAG_S             = 30      $ its first-order lag
@@ -15,6 +15,7 @@
 //! THERMAL_MUY_0, _1, _2 …           $ λμy ×= exp(c0 + c1·(x − N1) + c2·(x² − N2)); likewise MUX, KX, KY (c0, c1),
 //!                                   $ TRAIL, MRES, RL_MM (Rl += c0 + c1·x mm); no c0 for a base
 //!                                   $ fitted to the same logs
+//! THERMAL_FORCE_0, _1, _2           $ the force-level form instead: λμx, λμy, λKx, λKy ×= one factor
 //! WEAR_MUY, WEAR_KY, WEAR_CY, …     $ λ ×= exp(c·(E − N1) + c2·(E² − N2)), E = sliding energy [MJ];
 //! WEAR_MUY_S1, WEAR_MUX_S1          $ c2 on grip only; WEAR_RL_MM: Rl += c·(E − N1) mm;
 //! WEAR_NEUTRAL_MJ, WEAR_NEUTRAL_MJ2 $ N1, N2: 0 for a given model, the mean over the points for a
@@ -28,6 +29,8 @@
 //! TRANSIENT_SIGMA_Y0_M, TRANSIENT_ALPHA_HALF_DEG (…_X0_M, …_KAPPA_HALF)
 //!                                   $ dα'/ds = (α − α')/σ, σ = σ0/(1 + (α'/α½)²)
 //! REFIT_PRESSURE            = 'PPY1,PPY3,…' $ refitted coefficients (already in their sections)
+//! REFIT_REBASE              = 'PDX1,…'      $ the base refitted beside a state effect scored
+//!                                   $ against the form error (docs/doctor.md)
 //! ```
 
 use crate::DoctorError;
@@ -46,7 +49,7 @@ pub fn extended_params(base: &TyreParams, effects: &[EffectParams], refs: &state
     sec.lines
         .push("$ Added by `tyrerig doctor` (see docs/doctor.md). MF-Tyre 6.1 readers ignore this section;".to_owned());
     sec.lines.push("$ the terms need state inputs (grip temperature, sliding energy, travelled distance).".to_owned());
-    sec.set("FORMAT_VERSION", TirValue::Number(4.0));
+    sec.set("FORMAT_VERSION", TirValue::Number(5.0));
     let names: Vec<&str> = effects.iter().map(|e| e.effect.name()).collect();
     sec.set("EFFECTS", TirValue::Text(names.join(",")));
     for e in effects {
