@@ -118,6 +118,10 @@ pub struct CandidateScore {
     pub form_corrected: bool,
 }
 
+/// Share of the best state candidate's evidence within which a second one counts as tied with
+/// it: the two are then scored each beside the other (`Ctx::head_to_head`).
+pub const TIE_SHARE: f64 = 0.02;
+
 /// One re-score of the backward check: a named state effect as the last addition.
 #[derive(Debug, Clone, Serialize)]
 pub struct BackwardScore {
@@ -222,6 +226,9 @@ pub struct Diagnosis {
     /// The backward check's re-scores: each named state effect scored as the last addition to
     /// a model holding the other state effects named with it (every pass of the check).
     pub backward_check: Vec<BackwardScore>,
+    /// Rounds whose two best state candidates tied ([`TIE_SHARE`]), decided head to head: each
+    /// scored beside the other, in words.
+    pub ties: Vec<String>,
     /// References of the state variables (thermal reference and range, speed reference).
     pub references: state::References,
     /// Per log, the decay time constant of the laser flash fitted out of the quiet tread
@@ -1029,6 +1036,61 @@ impl Ctx<'_> {
         Some(fit.model)
     }
 
+    /// Decides a tie between the round's two best state candidates. When a second state
+    /// candidate is significant with at least `1 − TIE_SHARE` of the accepted one's evidence,
+    /// the two are told apart head to head: each is scored as the next addition beside the
+    /// other, and the one beside which the other explains less is kept. By evidence alone the
+    /// one ahead by a rounding error was named (a full GS2MF log with a thermal grip effect
+    /// hidden: break_in 0.1662 against thermal 0.1657, break_in named).
+    #[allow(clippy::too_many_arguments)]
+    fn head_to_head(
+        &self,
+        r: &Round,
+        scores: &[CandidateScore],
+        fits: &[Option<CandidateFit>],
+        order: &[usize],
+        acc: Accepted,
+        bw: &Bandwidths,
+        m_tests: usize,
+        ties: &mut Vec<String>,
+    ) -> Accepted {
+        let a = acc.named.effect;
+        let Some(ia) = scores.iter().position(|s| s.effect == a) else { return acc };
+        if scores[ia].family != Family::State {
+            return acc;
+        }
+        let tied = order.iter().copied().find(|&i| {
+            i != ia
+                && scores[i].family == Family::State
+                && scores[i].significant
+                && scores[i].evidence >= (1.0 - TIE_SHARE) * scores[ia].evidence
+        });
+        let Some(ib) = tied else { return acc };
+        let b = scores[ib].effect;
+        let Some(fit_b) = fits[ib].clone() else { return acc };
+        let Ok(b_acc) = self.judge(r, &scores[ib], fit_b, Some((a, scores[ia].evidence))) else { return acc };
+        let beside = |first: &Accepted, other: Effect| -> f64 {
+            let r2 = self.round(first.fit.model.clone(), bw);
+            self.score_all(&r2, &[other], m_tests).into_iter().next().map_or(0.0, |(s, _)| s.evidence)
+        };
+        let (b_given_a, a_given_b) = (beside(&acc, b), beside(&b_acc, a));
+        let keep_b = b_given_a > a_given_b;
+        ties.push(format!(
+            "{} and {} tied (evidence {:.4} and {:.4}); beside {} the other explains {:.1} % of the held-out χ², \
+             beside {} {:.1} %: {} named",
+            a.name(),
+            b.name(),
+            scores[ia].evidence,
+            scores[ib].evidence,
+            a.name(),
+            100.0 * b_given_a,
+            b.name(),
+            100.0 * a_given_b,
+            if keep_b { b.name() } else { a.name() }
+        ));
+        if keep_b { b_acc } else { acc }
+    }
+
     /// Masking: two state effects hidden together can each fail the bootstrap alone — the
     /// other's part, unexplained, makes a single effect's gain inconsistent over sweeps
     /// (benchmark: brush road tyre, thermal + wear, nothing named while wear alone was). When no
@@ -1309,6 +1371,7 @@ pub fn diagnose(ds: &Dataset, base: &TyreParams, cfg: &DoctorConfig) -> Result<D
     let mut stop_reason = String::new();
     let mut not_identifiable = Vec::new();
     let mut held_back = Vec::new();
+    let mut ties = Vec::new();
 
     loop {
         let done: Vec<Effect> = search.named.iter().map(|n| n.effect).collect();
@@ -1367,6 +1430,7 @@ pub fn diagnose(ds: &Dataset, base: &TyreParams, cfg: &DoctorConfig) -> Result<D
             }
         }
         if let Some(acc) = accepted {
+            let acc = ctx.head_to_head(&round, &scores, &fits, &order, acc, &bandwidths, m_tests, &mut ties);
             rounds.push(scores);
             search.accept(acc);
             continue;
@@ -1421,6 +1485,7 @@ pub fn diagnose(ds: &Dataset, base: &TyreParams, cfg: &DoctorConfig) -> Result<D
         not_identifiable,
         dropped,
         backward_check,
+        ties,
         references: ctx.ev.references(),
         flash_decay_s: ds.flash_decay_s.clone(),
         not_diagnosed,

@@ -91,6 +91,7 @@ pub fn to_json(
         "form_errors": dx.form_errors().map(|n| n.effect.name()).collect::<Vec<_>>(),
         "not_identifiable": dx.not_identifiable,
         "dropped": dx.dropped,
+        "ties": dx.ties,
         "backward_check": dx.backward_check.iter().map(|b| json!({
             "effect": b.score.effect.name(),
             "beside": b.beside.iter().map(|e| e.name()).collect::<Vec<_>>(),
@@ -235,10 +236,10 @@ pub fn markdown(
         }
         let _ = writeln!(m);
     }
-    for ni in dx.not_identifiable.iter().chain(&dx.dropped) {
+    for ni in dx.not_identifiable.iter().chain(&dx.dropped).chain(&dx.ties) {
         let _ = writeln!(m, "- {ni}.");
     }
-    if !dx.not_identifiable.is_empty() || !dx.dropped.is_empty() {
+    if !dx.not_identifiable.is_empty() || !dx.dropped.is_empty() || !dx.ties.is_empty() {
         let _ = writeln!(m);
     }
     let _ = writeln!(m, "Search stopped: {}\n", dx.stop_reason);

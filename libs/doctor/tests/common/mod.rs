@@ -36,10 +36,15 @@ pub fn run_log(procedure: &str, effects: &str, wear_multiplier: Option<f64>, see
     spec.effects = Some(effects.to_owned());
     spec.wear_multiplier = wear_multiplier;
     spec.seed = seed;
-    let mut h = Headless::new(&spec, thermal::ThermalConfig::default(), sequencer::SequencerConfig::default())
+    run_spec(&spec, &format!("{procedure} [{effects}]"))
+}
+
+/// Runs `spec` on the virtual rig; the log, its source named `source`.
+pub fn run_spec(spec: &RunSpec, source: &str) -> RawLog {
+    let mut h = Headless::new(spec, thermal::ThermalConfig::default(), sequencer::SequencerConfig::default())
         .expect("headless run");
     let mut sink = VecSink::default();
-    sink.0.source = format!("{procedure} [{effects}]");
+    sink.0.source = source.to_owned();
     h.run(&mut sink, &mut |_, _| {}).expect("run");
     sink.0
 }
