@@ -187,6 +187,16 @@ fn run_tyrerig(args: Vec<std::ffi::OsString>) {
     assert!(o.status.success(), "tyrerig {args:?}: {}", String::from_utf8_lossy(&o.stderr));
 }
 
+/// `tyrerig doctor <files> --fit --skip-stage mx --out <out>`; its doctor.json.
+fn doctor_with_fit(files: &[PathBuf], out: &std::path::Path) -> serde_json::Value {
+    let mut args: Vec<std::ffi::OsString> = vec!["doctor".into()];
+    args.extend(files.iter().map(|f| f.as_os_str().to_owned()));
+    args.extend(["--fit", "--skip-stage", "mx", "--out"].map(std::ffi::OsString::from));
+    args.push(out.as_os_str().to_owned());
+    run_tyrerig(args);
+    serde_json::from_str(&std::fs::read_to_string(out.join("doctor.json")).expect("doctor.json")).expect("parses")
+}
+
 /// The brush race tyre's TTC cornering run (4 pressures) and drive/brake run with warm-up
 /// sweeps, headless with the rig's relaxation on (`noise,thermal,transient`: FY lags SA, as in
 /// real runs), logged in `dir` and exported to TTC `.dat` beside each log; the logs' paths.
@@ -243,19 +253,10 @@ fn thermal_hidden_in_relaxing_ttc_runs_is_named_beside_transient() {
     inject.push(rig.clone().into());
     inject.extend(os(&["--effect", "thermal:2", "--seed", "1"]));
     run_tyrerig(inject);
-    let out = dir.join("doctor");
-    let mut doctor = os(&["doctor"]);
     for h in &hidden {
-        let mut export = os(&["export", "ttc"]);
-        export.push(h.into());
-        run_tyrerig(export);
-        doctor.push(h.with_extension("dat").into());
+        run_tyrerig(vec!["export".into(), "ttc".into(), h.into()]);
     }
-    doctor.extend(os(&["--fit", "--skip-stage", "mx", "--out"]));
-    doctor.push(out.clone().into());
-    run_tyrerig(doctor);
-    let d: serde_json::Value =
-        serde_json::from_str(&std::fs::read_to_string(out.join("doctor.json")).expect("doctor.json")).expect("parses");
+    let d = doctor_with_fit(&hidden.iter().map(|h| h.with_extension("dat")).collect::<Vec<_>>(), &dir.join("doctor"));
     let names = named(&d);
     assert_eq!(names, ["thermal", "transient"], "named {names:?}; {}", d["stop_reason"]);
 
@@ -272,14 +273,7 @@ fn thermal_hidden_in_relaxing_ttc_runs_is_named_beside_transient() {
         hide_outsider_thermal(&dat, &out);
         hidden_dat.push(out);
     }
-    let out = dir.join("doctor_outsider");
-    let mut doctor = os(&["doctor"]);
-    doctor.extend(hidden_dat.iter().map(OsString::from));
-    doctor.extend(os(&["--fit", "--skip-stage", "mx", "--out"]));
-    doctor.push(out.clone().into());
-    run_tyrerig(doctor);
-    let d: serde_json::Value =
-        serde_json::from_str(&std::fs::read_to_string(out.join("doctor.json")).expect("doctor.json")).expect("parses");
+    let d = doctor_with_fit(&hidden_dat, &dir.join("doctor_outsider"));
     let names = named(&d);
     assert_eq!(names, ["transient", "thermal"], "named {names:?}; {}", d["stop_reason"]);
     let thermal = d["effects"].as_array().expect("effects").iter().find(|e| e["effect"] == "thermal").expect("thermal");
@@ -298,10 +292,8 @@ fn thermal_hidden_in_relaxing_ttc_runs_is_named_beside_transient() {
 /// over its total. The same runs as they are name `transient` alone.
 #[test]
 fn wear_hidden_by_an_outsider_in_relaxing_ttc_runs_is_named_beside_transient_alone() {
-    use std::ffi::OsString;
     let dir = PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join("doctor_cli").join("relaxing_ttc_wear");
     std::fs::create_dir_all(&dir).expect("output dir");
-    let os = |v: &[&str]| v.iter().map(OsString::from).collect::<Vec<_>>();
     let clean = relaxing_ttc_runs(&dir);
     let worn: Vec<PathBuf> = clean
         .iter()
@@ -311,27 +303,14 @@ fn wear_hidden_by_an_outsider_in_relaxing_ttc_runs_is_named_beside_transient_alo
             out
         })
         .collect();
-    let out = dir.join("doctor_worn");
-    let mut doctor = os(&["doctor"]);
-    doctor.extend(worn.iter().map(OsString::from));
-    doctor.extend(os(&["--fit", "--skip-stage", "mx", "--out"]));
-    doctor.push(out.clone().into());
-    run_tyrerig(doctor);
-    let d: serde_json::Value =
-        serde_json::from_str(&std::fs::read_to_string(out.join("doctor.json")).expect("doctor.json")).expect("parses");
+    let d = doctor_with_fit(&worn, &dir.join("doctor_worn"));
     let mut names = named(&d);
     names.sort();
     assert_eq!(names, ["transient", "wear"], "named {names:?}; {}", d["stop_reason"]);
 
     // The control: the same runs as they are (the rig's relaxation, no grip effect of heat).
-    let out = dir.join("doctor_clean");
-    let mut doctor = os(&["doctor"]);
-    doctor.extend(clean.iter().map(|c| OsString::from(c.with_extension("dat"))));
-    doctor.extend(os(&["--fit", "--skip-stage", "mx", "--out"]));
-    doctor.push(out.clone().into());
-    run_tyrerig(doctor);
-    let d: serde_json::Value =
-        serde_json::from_str(&std::fs::read_to_string(out.join("doctor.json")).expect("doctor.json")).expect("parses");
+    let d =
+        doctor_with_fit(&clean.iter().map(|c| c.with_extension("dat")).collect::<Vec<_>>(), &dir.join("doctor_clean"));
     let names = named(&d);
     assert_eq!(names, ["transient"], "named {names:?} on the runs as they are; {}", d["stop_reason"]);
 }
