@@ -9,6 +9,7 @@
 
 use mffit::SweepKind;
 
+use crate::mat::MatUnits;
 use crate::table::ChannelTable;
 
 /// A sweep the fixture holds.
@@ -102,6 +103,8 @@ pub enum UnitStyle {
     LaterRound,
     /// US units where the file says so: mph, in, psi, lbf, degF.
     Imperial,
+    /// TTC's "USCS" distribution of a run: lb, psi, in, mph, ft-lb, deg F.
+    Uscs,
 }
 
 impl FixtureSpec {
@@ -427,7 +430,7 @@ fn tabulate(spec: &FixtureSpec, rows: &[(f64, State)]) -> ChannelTable {
         "TSTO", "AMBTMP", "SR", "SL",
     ];
     let units = units_of(spec.units);
-    if spec.units == UnitStyle::Imperial {
+    if matches!(spec.units, UnitStyle::Imperial | UnitStyle::Uscs) {
         // Written in US units: divide by the unit's size (temperatures: to °F).
         let scale = |c: &mut Vec<f64>, k: f64| c.iter_mut().for_each(|v| *v /= k);
         scale(&mut c[1], 1.609_344); // V mph
@@ -439,6 +442,12 @@ fn tabulate(spec: &FixtureSpec, rows: &[(f64, State)]) -> ChannelTable {
         }
         for k in [15, 16, 17, 18] {
             c[k].iter_mut().for_each(|v| *v = *v * 9.0 / 5.0 + 32.0);
+        }
+        if spec.units == UnitStyle::Uscs {
+            for k in [11, 12] {
+                scale(&mut c[k], 4.448_221_615_260_5 * 0.3048); // lbf·ft
+            }
+            // AMBTMP is written honestly in °F here (86.5 stands for 30.3 °C).
         }
     }
     let mut t = ChannelTable {
@@ -482,6 +491,10 @@ fn units_of(style: UnitStyle) -> [&'static str; 22] {
             "s", "mph", "rpm", "deg", "deg", "in", "in", "psi", "lbf", "lbf", "lbf", "N-m", "N-m", "none", "none",
             "degF", "degF", "degF", "degF", "degF", "none", "none",
         ],
+        UnitStyle::Uscs => [
+            "s", "mph", "rpm", "deg", "deg", "in", "in", "psi", "lb", "lb", "lb", "ft-lb", "ft-lb", "none", "none",
+            "deg F", "deg F", "deg F", "deg F", "deg F", "none", "none",
+        ],
     }
 }
 
@@ -494,6 +507,8 @@ pub struct QuirkFixture {
     pub quirk: &'static str,
     /// The run.
     pub spec: FixtureSpec,
+    /// Where a `.mat` file's units go.
+    pub mat_units: MatUnits,
 }
 
 /// Every quirk of other rounds' files, one synthetic run each (`tyrerig export quirk-fixtures`,
@@ -505,16 +520,19 @@ pub fn quirk_fixtures() -> Vec<QuirkFixture> {
             file: "later_round_drive_brake.dat",
             quirk: "units spelled sec, Nm, deg C, deg F (AMBTMP) and SAE (SL)",
             spec: FixtureSpec { units: UnitStyle::LaterRound, ..FixtureSpec::drive_brake() },
+            mat_units: MatUnits::TtcAssumed,
         },
         QuirkFixture {
             file: "later_round_cornering.mat",
             quirk: "a .mat file with no units at all",
             spec: FixtureSpec { units: UnitStyle::LaterRound, ..FixtureSpec::cornering() },
+            mat_units: MatUnits::TtcAssumed,
         },
         QuirkFixture {
             file: "us_units_cornering.dat",
             quirk: "mph, in, psi, lbf, degF where the file says so",
             spec: FixtureSpec { units: UnitStyle::Imperial, ..FixtureSpec::cornering() },
+            mat_units: MatUnits::TtcAssumed,
         },
         QuirkFixture {
             file: "older_round_cornering_camber.dat",
@@ -525,31 +543,49 @@ pub fn quirk_fixtures() -> Vec<QuirkFixture> {
                 camber_sweep: Some(camber.clone()),
                 ..FixtureSpec::cornering()
             },
+            mat_units: MatUnits::TtcAssumed,
         },
         QuirkFixture {
             file: "load_wander_cornering.dat",
             quirk: "load wandering ±20 % around its setpoint during slip-angle sweeps, the next load set as a sweep ends",
             spec: FixtureSpec { fz_wander: 0.2, no_settle_after_sweeps: true, ..FixtureSpec::cornering() },
+            mat_units: MatUnits::TtcAssumed,
         },
         QuirkFixture {
             file: "camber_sweeps_cornering.dat",
             quirk: "camber stepped 0–4° at a held slip angle of 1.8°, cornering at cambers 0 and 2°",
             spec: FixtureSpec { cambers_deg: vec![0.0, 2.0], camber_sweep: Some(camber), ..FixtureSpec::cornering() },
+            mat_units: MatUnits::TtcAssumed,
         },
         QuirkFixture {
             file: "pure_longitudinal_065.dat",
             quirk: "pure longitudinal sweeps at slip angle 0 to slip ratio ±0.65",
             spec: pure_longitudinal(false),
+            mat_units: MatUnits::TtcAssumed,
         },
         QuirkFixture {
             file: "older_round_pure_longitudinal_065.dat",
             quirk: "pure longitudinal to ±0.65 with only SR (the wheel driven and braked)",
             spec: pure_longitudinal(true),
+            mat_units: MatUnits::TtcAssumed,
         },
         QuirkFixture {
             file: "warmup_drive_brake.dat",
             quirk: "five full warm-up sweeps at 1,100 N opening a drive/brake run, 1,100 N swept again later",
             spec: FixtureSpec { loads_n: vec![660.0, 1100.0], warmup_sweeps: 5, ..FixtureSpec::drive_brake() },
+            mat_units: MatUnits::TtcAssumed,
+        },
+        QuirkFixture {
+            file: "uscs_cornering.mat",
+            quirk: "TTC's USCS distribution (lb, psi, in, mph, ft-lb, deg F) with the units in the `channel` struct",
+            spec: FixtureSpec { units: UnitStyle::Uscs, ..FixtureSpec::cornering() },
+            mat_units: MatUnits::ChannelStruct,
+        },
+        QuirkFixture {
+            file: "uscs_no_units_drive_brake.mat",
+            quirk: "a USCS drive/brake run saved without any units (US customary told from the magnitudes)",
+            spec: FixtureSpec { units: UnitStyle::Uscs, ..FixtureSpec::drive_brake() },
+            mat_units: MatUnits::Unlisted,
         },
     ]
 }

@@ -145,6 +145,12 @@ fn assumed_unit(role: Role, values: &[f64], family: Family, ctx: &GuessContext) 
             q => q.target_unit(),
         },
     };
+    if family == Family::Ttc
+        && let Some(us) = &ctx.us_customary
+        && let Some(u) = us.unit_of(role.quantity())
+    {
+        return (u.to_owned(), None);
+    }
     let med = median(values.iter().map(|v| v.abs()).filter(|v| *v > 0.0).collect());
     let guess = |u: &str, why: String| (u.to_owned(), Some(why));
     match (role, med) {
@@ -201,9 +207,69 @@ fn assumed_unit(role: Role, values: &[f64], family: Family, ctx: &GuessContext) 
     }
 }
 
-/// Rough rolling speed from wheel speed and loaded radius, used to tell kph from m/s.
+/// What the whole file says about the units it does not give.
 struct GuessContext {
+    /// Rough rolling speed from wheel speed and loaded radius, used to tell kph from m/s.
     rolling_mps: Option<f64>,
+    /// The file is in US customary units (TTC distributes every run in SI and in "USCS").
+    us_customary: Option<UsCustomary>,
+}
+
+/// A run saved in US customary units without its units: lbf, psi, in, mph, °F, and moments in
+/// lbf·ft (or lbf·in where the moment arms say so).
+#[derive(Debug, Clone)]
+struct UsCustomary {
+    moment_unit: &'static str,
+    why: String,
+}
+
+impl UsCustomary {
+    fn unit_of(&self, q: Quantity) -> Option<&'static str> {
+        Some(match q {
+            Quantity::Speed => "mph",
+            Quantity::Length => "in",
+            Quantity::Pressure => "psi",
+            Quantity::Force => "lbf",
+            Quantity::Moment => self.moment_unit,
+            Quantity::Temperature => "degF",
+            _ => return None,
+        })
+    }
+
+    /// Judges from the unitless columns: road speed against wheel speed × loaded radius (25 mph
+    /// with a 10 in radius and 40 kph with 25 cm roll alike, at 330 and 425 rpm), or, without
+    /// those, a pressure in psi with a radius in inches. Moment arms (|MZ| against |FY|, both
+    /// 98th percentiles) tell lbf·ft (a trail of 0.02–0.15 ft) from lbf·in (0.2–2 in).
+    fn detect(table: &ChannelTable, col: impl Fn(Role) -> Option<usize>) -> Option<UsCustomary> {
+        let unitless = |r: Role| col(r).map(|i| &table.columns[i]).filter(|c| c.unit.trim().is_empty());
+        let med = |r: Role| unitless(r).and_then(|c| median(c.values.iter().map(|v| v.abs()).collect()));
+        let (rl, p) = (med(Role::LoadedRadius)?, med(Role::Pressure));
+        let why = match (med(Role::WheelSpeed), med(Role::RoadSpeed)) {
+            (Some(rpm), Some(v)) if rpm > 10.0 && v > 1.0 => {
+                let omega = rpm * std::f64::consts::PI / 30.0;
+                let miss = |rl_m: f64, v_mps: f64| (omega * rl_m / v_mps).ln().abs();
+                let (us, si) = (miss(rl * 0.0254, v * 0.447_04), miss(rl / 100.0, v / 3.6));
+                if us >= si.min(0.25) {
+                    return None;
+                }
+                format!(
+                    "road speed {v:.1} matches wheel speed {rpm:.0} rpm × loaded radius {rl:.2} as mph and inches, not as kph and cm"
+                )
+            }
+            _ => match p {
+                Some(p) if (3.0..50.0).contains(&p) && (5.0..17.0).contains(&rl) => {
+                    format!("pressure median {p:.1} looks like psi and loaded radius median {rl:.2} like inches")
+                }
+                _ => return None,
+            },
+        };
+        let p98 = |r: Role| unitless(r).and_then(|c| quantile_abs(&c.values, 0.98));
+        let moment_unit = match (p98(Role::Mz), p98(Role::Fy)) {
+            (Some(mz), Some(fy)) if fy > 0.0 && mz / fy > 0.25 => "lbf-in",
+            _ => "lbf-ft",
+        };
+        Some(UsCustomary { moment_unit, why })
+    }
 }
 
 /// Reads a table into signals. `family` sets the units assumed where the file has none.
@@ -252,7 +318,21 @@ pub fn interpret(
         }
         _ => None,
     };
-    let ctx = GuessContext { rolling_mps };
+    let us_customary = match family {
+        Family::Ttc => UsCustomary::detect(table, |r| by_role.iter().find(|(x, _)| *x == r).map(|(_, i)| *i)),
+        Family::Tydex => None,
+    };
+    if let Some(us) = &us_customary {
+        warn.push(
+            "US customary units",
+            Place::file(file),
+            format!(
+                "no units in the file and {}: read as US customary (forces lbf, moments {}, lengths in, speed mph, pressure psi, temperatures degF)",
+                us.why, us.moment_unit
+            ),
+        );
+    }
+    let ctx = GuessContext { rolling_mps, us_customary };
     let mut uses = Vec::with_capacity(table.columns.len());
     let mut units_of: Vec<(Role, Unit)> = Vec::new();
     let mut assumed = Vec::new();
@@ -323,15 +403,32 @@ pub fn interpret(
                 });
                 continue;
             }
+            // A spelling we do not know on a channel the fitter needs: refusing a whole run
+            // for it helps no one. Read it as if the file gave no unit (the TTC unit, checked
+            // against the magnitudes) and say so loudly.
             None => {
-                return Err(ReadError::at(
+                let (assumed_text, why) = assumed_unit(role, &c.values, family, &ctx);
+                let Some(u) = units::parse(&assumed_text).filter(|u| u.quantity == role.quantity()) else {
+                    return Err(ReadError::at(place, format!("unknown unit `{unit_text}`")));
+                };
+                warn.push(
+                    "unknown unit",
                     place,
                     format!(
-                        "unknown unit `{unit_text}` (known for a {}: {})",
+                        "unknown unit `{unit_text}` (known for a {}: {}): read as {assumed_text}{}; check the values",
                         role.quantity().name(),
-                        known_units(role.quantity())
+                        known_units(role.quantity()),
+                        why.map(|w| format!(" ({w})")).unwrap_or_default()
                     ),
-                ));
+                );
+                units_of.push((role, u));
+                uses.push(ChannelUse {
+                    name: c.name.clone(),
+                    unit_written: c.unit.clone(),
+                    unit_read: assumed_text,
+                    used_as: format!("{} [{}], unit assumed", role.tydex_name(), role.quantity().target_unit()),
+                });
+                continue;
             }
         };
         let _ = guessed;
@@ -356,7 +453,7 @@ pub fn interpret(
             },
         });
     }
-    if !assumed.is_empty() {
+    if !assumed.is_empty() && ctx.us_customary.is_none() {
         warn.push(
             "units assumed",
             Place::file(file),

@@ -97,12 +97,13 @@ pub fn parse(text: &str) -> Option<Unit> {
     use Quantity::*;
     let t = text.trim().trim_matches(|c| matches!(c, '[' | ']' | '(' | ')')).trim();
     let lower = t.to_lowercase().replace(['°', 'º'], "deg").replace(' ', "");
-    let (quantity, scale, offset) = match lower.as_str() {
+    let compound = us_compound(&lower);
+    let (quantity, scale, offset) = match compound.as_deref().unwrap_or(lower.as_str()) {
         "s" | "sec" | "secs" | "second" | "seconds" => (Time, 1.0, 0.0),
         "ms" => (Time, 1e-3, 0.0),
         "kph" | "km/h" | "kmh" | "km/hr" | "kmph" => (Speed, 1.0 / 3.6, 0.0),
         "m/s" | "mps" | "m/sec" => (Speed, 1.0, 0.0),
-        "mph" => (Speed, 0.447_04, 0.0),
+        "mph" | "mi/h" | "mi/hr" | "mile/h" => (Speed, 0.447_04, 0.0),
         "rpm" | "1/min" | "rev/min" | "u/min" => (AngularSpeed, std::f64::consts::PI / 30.0, 0.0),
         "rad/s" | "rad/sec" | "1/s" => (AngularSpeed, 1.0, 0.0),
         "deg/s" | "deg/sec" => (AngularSpeed, std::f64::consts::PI / 180.0, 0.0),
@@ -117,14 +118,14 @@ pub fn parse(text: &str) -> Option<Unit> {
         "kpa" => (Pressure, 1e3, 0.0),
         "mpa" => (Pressure, 1e6, 0.0),
         "bar" => (Pressure, 1e5, 0.0),
-        "psi" | "lbf/in2" | "lb/in2" | "lb/in^2" => (Pressure, PSI_PA, 0.0),
+        "psi" | "psig" | "lbf/in2" | "lb/in2" | "lb/in^2" => (Pressure, PSI_PA, 0.0),
         "n" => (Force, 1.0, 0.0),
         "kn" => (Force, 1e3, 0.0),
         "lbf" | "lb" | "lbs" => (Force, LBF_N, 0.0),
         "n-m" | "nm" | "n*m" | "n.m" | "n·m" | "n_m" => (Moment, 1.0, 0.0),
         "knm" | "kn-m" | "kn*m" | "kn.m" => (Moment, 1e3, 0.0),
-        "lbf-ft" | "lb-ft" | "ft-lbf" | "ft-lb" | "lbfft" | "ftlb" | "lbf*ft" | "ft*lbf" => (Moment, LBF_N * FT_M, 0.0),
-        "lbf-in" | "lb-in" | "in-lbf" | "in-lb" | "lbf*in" | "in*lbf" => (Moment, LBF_N * IN_M, 0.0),
+        "lb-ft" => (Moment, LBF_N * FT_M, 0.0),
+        "lb-in" => (Moment, LBF_N * IN_M, 0.0),
         // `SAE` is how some TTC rounds label SL: the SAE slip-ratio definition, a plain ratio.
         "none" | "-" | "1" | "ratio" | "nd" | "n/a" | "sae" => (Ratio, 1.0, 0.0),
         "%" | "percent" => (Ratio, 0.01, 0.0),
@@ -134,6 +135,32 @@ pub fn parse(text: &str) -> Option<Unit> {
         _ => return None,
     };
     Some(Unit { quantity, scale, offset })
+}
+
+/// US force and moment units come in many spellings (`lbs`, `lbf`, `ft-lb`, `ft*lbs`, `lb.ft`,
+/// `in lbs`): the force part is reduced to `lb` and a moment to `lb-ft` / `lb-in`, whatever the
+/// order and the separator. `None` for anything else.
+fn us_compound(lower: &str) -> Option<String> {
+    let parts: Vec<&str> = lower.split(['-', '*', '.', '·', '_']).filter(|p| !p.is_empty()).collect();
+    let is_lb = |p: &str| matches!(p, "lb" | "lbs" | "lbf");
+    match parts.as_slice() {
+        [p] if is_lb(p) => Some("lb".into()),
+        [p] => {
+            // Written without a separator: `ftlb`, `lbfft`, `inlbs`, `lbin`.
+            ["lbf", "lbs", "lb"].iter().find_map(|lb| moment_of(p.strip_prefix(lb).or_else(|| p.strip_suffix(lb))?))
+        }
+        [a, b] if is_lb(a) => moment_of(b),
+        [a, b] if is_lb(b) => moment_of(a),
+        _ => None,
+    }
+}
+
+fn moment_of(arm: &str) -> Option<String> {
+    match arm {
+        "ft" | "feet" | "foot" => Some("lb-ft".into()),
+        "in" | "inch" | "inches" => Some("lb-in".into()),
+        _ => None,
+    }
 }
 
 /// The SI scale and offset TYDEX expects in a channel's conversion factor for a written unit
@@ -174,6 +201,19 @@ mod tests {
         assert!(close(conv("mph", 25.0), 11.176));
         assert!(close(conv("in", 10.0), 0.254));
         assert!(parse("furlongs").is_none());
+        // US force and moment spellings, any order and separator.
+        for f in ["lb", "lbs", "LBF", "lbf"] {
+            assert!(close(conv(f, 100.0), 444.822_161_526), "{f}");
+        }
+        for m in ["ft-lb", "ft*lb", "ft-lbs", "lb-ft", "lbf-ft", "ft lbf", "ftlb", "lbft", "lb.ft", "ft-lbf"] {
+            assert!(close(conv(m, 1.0), 1.355_817_948), "{m}");
+        }
+        for m in ["in-lb", "in*lbs", "lb-in", "inlb", "lbf-in", "in lbs"] {
+            assert!(close(conv(m, 12.0), 1.355_817_948), "{m}");
+        }
+        assert!(close(conv("psig", 12.0), 82_737.087_518));
+        assert!(parse("lb-furlong").is_none());
+        assert!(parse("x").is_none());
         let u = parse("bar").unwrap();
         assert!(close(u.from_target(u.to_target(1.3)), 1.3));
     }

@@ -154,10 +154,13 @@ fn unknown_units_and_test_kind_disagreements_are_named() {
     let run = ttc_run(&FixtureSpec::cornering());
     let mut t = run.table.clone();
     t.columns.iter_mut().find(|c| c.name == "P").unwrap().unit = "furlong".into();
-    let e = read_bytes(to_dat(&t, DatLayout::default()).as_bytes(), "u.dat", FileFormat::Dat, &ReadOptions::default())
-        .unwrap_err()
-        .to_string();
-    assert!(e.starts_with("u.dat: channel P: unknown unit `furlong`"), "{e}");
+    // An unknown spelling does not refuse the run: the TTC unit is assumed, loudly.
+    let (d, r) = import(to_dat(&t, DatLayout::default()).as_bytes(), "u.dat", FileFormat::Dat);
+    let w = r.warnings.iter().find(|w| w.message.contains("unknown unit `furlong`")).expect("warning");
+    assert_eq!(w.place.to_string(), "u.dat: channel P", "{w:?}");
+    assert!(w.message.contains("read as kPa"), "{w:?}");
+    let (clean, _) = import(to_dat(&run.table, DatLayout::default()).as_bytes(), "c.dat", FileFormat::Dat);
+    assert_same(&clean, &d, 1e-9);
     let mut t = run.table.clone();
     t.columns.iter_mut().find(|c| c.name == "FZ").unwrap().unit = "deg".into();
     let e = read_bytes(to_dat(&t, DatLayout::default()).as_bytes(), "w.dat", FileFormat::Dat, &ReadOptions::default())

@@ -55,8 +55,14 @@ fn mat_written_with_every_option_reads_back_identically() {
             for layout in [MatLayout::Variables, MatLayout::Struct("data".into())] {
                 for narrow_integers in [false, true] {
                     for chars in [CharEncoding::Utf16, CharEncoding::Utf8] {
-                        let opt =
-                            MatWriteOptions { compress, big_endian, layout: layout.clone(), narrow_integers, chars };
+                        let opt = MatWriteOptions {
+                            compress,
+                            big_endian,
+                            layout: layout.clone(),
+                            narrow_integers,
+                            chars,
+                            ..Default::default()
+                        };
                         let bytes = to_mat(&t, &opt).unwrap();
                         let m = parse_mat(&bytes, "x.mat").unwrap_or_else(|e| panic!("{opt:?}: {e}"));
                         assert!(m.warnings.is_empty(), "{opt:?}: {:?}", m.warnings);

@@ -8,7 +8,7 @@ use mffit::{DataKind, Dataset, Procedure, SweepKind};
 use rigdata::fixture::{CamberSweep, FixtureRun, FixtureSpec, UnitStyle, ttc_run};
 use rigdata::import::{CAMBER_SECTION, FileFormat, ReadOptions, read_bytes};
 use rigdata::inspect::{FileReport, Inspection};
-use rigdata::mat::{MatWriteOptions, to_mat};
+use rigdata::mat::{MatUnits, MatWriteOptions, to_mat};
 use rigdata::table::{DatLayout, to_dat};
 
 fn import(bytes: &[u8], name: &str, format: FileFormat) -> (Dataset, FileReport) {
@@ -82,6 +82,61 @@ fn a_mat_file_without_units_is_read_in_ttc_units() {
     assert_found(&run, &d, &r);
     assert!(r.channels.iter().all(|c| c.unit_written.is_empty()));
     assert!(r.warnings.iter().any(|w| w.message.contains("TTC units assumed")), "{:?}", r.warnings);
+    assert!(!r.warnings.iter().any(|w| w.message.contains("US customary")), "{:?}", r.warnings);
+}
+
+#[test]
+fn ttc_uscs_runs_read_in_si_with_their_units_list_or_without_any() {
+    // TTC distributes every run in SI and in "USCS" (lb, psi, in, mph, ft-lb, deg F); its `.mat`
+    // files list the units in a struct `channel` (`name`, `units`: cells of strings), and a run
+    // saved without that list must be told from its magnitudes. Read either way, the run is the
+    // SI run: the same sweeps and the same values.
+    for spec in [FixtureSpec::cornering(), FixtureSpec::drive_brake()] {
+        let si_run = ttc_run(&spec);
+        let (si, _) = import(&to_mat(&si_run.table, &MatWriteOptions::default()).unwrap(), "si.mat", FileFormat::Mat);
+        let run = ttc_run(&FixtureSpec { units: UnitStyle::Uscs, ..spec });
+        for units in [MatUnits::ChannelStruct, MatUnits::Unlisted] {
+            let mat = to_mat(&run.table, &MatWriteOptions { units, ..Default::default() }).unwrap();
+            let (d, r) = import(&mat, "uscs.mat", FileFormat::Mat);
+            assert_found(&run, &d, &r);
+            assert_eq!(d.segments.len(), si.segments.len());
+            for (a, b) in si.segments.iter().zip(&d.segments) {
+                assert_eq!(a.sweep, b.sweep);
+                for (p, q) in a.samples.iter().zip(&b.samples) {
+                    for (what, u, v) in [
+                        ("FZ", p.fz_n, q.fz_n),
+                        ("FX", p.fx_n, q.fx_n),
+                        ("FY", p.fy_n, q.fy_n),
+                        ("MZ", p.mz_nm, q.mz_nm),
+                        ("RL", p.rl_m, q.rl_m),
+                        ("P", p.p_pa, q.p_pa),
+                        ("V", p.vx_mps, q.vx_mps),
+                        ("T", p.temp_c, q.temp_c),
+                    ] {
+                        assert!((u - v).abs() <= 1e-6 * u.abs().max(1.0), "{units:?} {}: {what} {u} vs {v}", a.sweep);
+                    }
+                }
+            }
+            let unit = |n: &str| r.channels.iter().find(|c| c.name == n).unwrap().clone();
+            match units {
+                MatUnits::ChannelStruct => {
+                    assert_eq!(unit("FZ").unit_written, "lb");
+                    assert_eq!(unit("MZ").unit_written, "ft-lb");
+                    assert!(r.layout.as_deref().unwrap_or("").contains("units of 22 channels from `channel`"), "{r:?}");
+                    assert!(!r.warnings.iter().any(|w| w.message.contains("assumed")), "{:?}", r.warnings);
+                }
+                _ => {
+                    assert!(unit("FZ").unit_written.is_empty());
+                    assert_eq!(
+                        [unit("FZ").unit_read, unit("MZ").unit_read, unit("V").unit_read],
+                        ["lbf", "lbf-ft", "mph"]
+                    );
+                    let w = r.warnings.iter().find(|w| w.message.contains("read as US customary")).expect("warning");
+                    assert!(w.message.contains("as mph and inches"), "{w:?}");
+                }
+            }
+        }
+    }
 }
 
 #[test]

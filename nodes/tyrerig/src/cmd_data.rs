@@ -171,7 +171,7 @@ fn export_quirks(dir: &Path) -> Result<()> {
         let run = rigdata::fixture::ttc_run(&q.spec);
         let out = dir.join(q.file);
         if q.file.ends_with(".mat") {
-            rigdata::mat::write_mat(&out, &run.table, &MatWriteOptions::default())?;
+            rigdata::mat::write_mat(&out, &run.table, &MatWriteOptions { units: q.mat_units, ..Default::default() })?;
         } else {
             std::fs::write(&out, rigdata::virtual_export::to_dat_compact(&run.table))
                 .with_context(|| format!("writing {}", out.display()))?;

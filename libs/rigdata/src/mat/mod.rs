@@ -19,7 +19,7 @@ mod read;
 mod write;
 
 pub use read::{MatFile, parse_mat, read_mat};
-pub use write::{CharEncoding, MatLayout, MatWriteOptions, to_mat, write_mat};
+pub use write::{CharEncoding, MatLayout, MatUnits, MatWriteOptions, to_mat, write_mat};
 
 /// Data element types (MAT-File Format, Table 1-1).
 pub(crate) mod ty {

@@ -36,7 +36,7 @@ enum Value {
     Numeric { dims: Vec<usize>, values: Vec<f64>, complex: bool },
     Char { text: String },
     Struct { dims: Vec<usize>, fields: Vec<(String, Vec<Value>)> },
-    Cell,
+    Cell { dims: Vec<usize>, items: Vec<Value> },
     Other { class: u8 },
     Empty,
 }
@@ -47,7 +47,7 @@ impl Value {
             Value::Numeric { dims, .. } => format!("numeric {}", dims_text(dims)),
             Value::Char { .. } => "char array".into(),
             Value::Struct { dims, .. } => format!("struct {}", dims_text(dims)),
-            Value::Cell => "cell array".into(),
+            Value::Cell { dims, .. } => format!("cell array {}", dims_text(dims)),
             Value::Other { class } => format!("class {class}"),
             Value::Empty => "empty".into(),
         }
@@ -298,7 +298,26 @@ fn matrix(cx: &mut Ctx, b: &[u8], depth: usize, parent: &str) -> Result<(String,
             }
             Value::Struct { dims, fields }
         }
-        class::CELL => Value::Cell,
+        class::CELL => {
+            // Every item is at least an 8-byte tag: bound the count by the bytes.
+            if count > b.len().saturating_sub(at) / 8 {
+                return Err(cx.err(
+                    &here,
+                    format!("cell {} cannot fit in {} bytes", dims_text(&dims), b.len().saturating_sub(at)),
+                ));
+            }
+            let mut items = Vec::with_capacity(count);
+            for k in 0..count {
+                let e = element(cx, b, at, &here)?;
+                at = e.next;
+                items.push(if e.ty == ty::MATRIX {
+                    matrix(cx, e.data, depth + 1, &format!("{here}{{{}}}", k + 1))?.1
+                } else {
+                    Value::Other { class: 0 }
+                });
+            }
+            Value::Cell { dims, items }
+        }
         other => Value::Other { class: other },
     };
     let _ = at;
@@ -485,6 +504,7 @@ fn is_vector(dims: &[usize]) -> bool {
 fn tabulate(cx: &mut Ctx, vars: Vec<(String, Value)>) -> Result<(ChannelTable, String), ReadError> {
     let file = cx.file.to_owned();
     let mut table = ChannelTable { source: file.clone(), ..Default::default() };
+    let unit_list = vars.iter().find_map(|(name, v)| unit_list_of(v).map(|l| (name.clone(), l)));
     // Candidate layouts: the top level, and each 1×1 struct variable.
     let mut layouts: Vec<(String, Vec<(String, Value)>)> = vec![("top-level variables".into(), Vec::new())];
     for (name, v) in vars {
@@ -562,9 +582,50 @@ fn tabulate(cx: &mut Ctx, vars: Vec<(String, Value)>) -> Result<(ChannelTable, S
                 };
                 cx.warn.push("skipped variable", place, format!("{what}: not used as a channel"));
             }
-            Value::Char { .. } if ["tireid", "tyreid", "testid"].iter().any(|k| name.eq_ignore_ascii_case(k)) => {}
+            Value::Char { .. }
+                if ["tireid", "tyreid", "testid", "source"].iter().any(|k| name.eq_ignore_ascii_case(k)) => {}
             other => cx.warn.push("skipped variable", place, format!("{}: not used", other.describe())),
         }
     }
+    let layout = match unit_list {
+        Some((holder, list)) => {
+            let mut given = 0;
+            for c in &mut table.columns {
+                if let Some((_, u)) = list.iter().find(|(n, _)| n.trim().eq_ignore_ascii_case(&c.name)) {
+                    c.unit = u.trim().to_owned();
+                    given += 1;
+                }
+            }
+            format!("{layout}; units of {given} channels from `{holder}`")
+        }
+        None => layout,
+    };
     Ok((table, layout))
+}
+
+/// Channel names and their units, where a variable lists them: TTC files carry a 1×1 struct
+/// `channel` whose fields `name` and `units` are cell arrays of strings (a struct array with one
+/// element per channel is read too). `None` when `v` is no such list.
+fn unit_list_of(v: &Value) -> Option<Vec<(String, String)>> {
+    let Value::Struct { fields, .. } = v else { return None };
+    let field = |keys: &[&str]| {
+        fields.iter().find(|(n, _)| keys.iter().any(|k| n.eq_ignore_ascii_case(k))).map(|(_, vs)| vs.as_slice())
+    };
+    let texts = |vs: &[Value]| -> Option<Vec<String>> {
+        let items = match vs {
+            [Value::Cell { items, .. }] => items.as_slice(),
+            many => many,
+        };
+        items
+            .iter()
+            .map(|i| match i {
+                Value::Char { text } => Some(text.clone()),
+                Value::Empty => Some(String::new()),
+                _ => None,
+            })
+            .collect()
+    };
+    let names = texts(field(&["name", "names"])?)?;
+    let units = texts(field(&["units", "unit"])?)?;
+    (names.len() == units.len() && !names.is_empty()).then(|| names.into_iter().zip(units).collect())
 }

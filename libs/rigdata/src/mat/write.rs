@@ -32,6 +32,20 @@ pub enum CharEncoding {
     Utf8,
 }
 
+/// Where a `.mat` file's units are, if anywhere.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum MatUnits {
+    /// No units: the values converted to the TTC units, which a reader assumes.
+    #[default]
+    TtcAssumed,
+    /// The values in the table's own units, listed in a 1×1 struct `channel` whose fields
+    /// `name` and `units` are cell arrays of strings, as TTC's distributed files have them.
+    ChannelStruct,
+    /// The values in the table's own units and no units anywhere (a US-customary run saved
+    /// without its units list): the reader must tell the system from the magnitudes.
+    Unlisted,
+}
+
 /// Options of [`to_mat`].
 #[derive(Debug, Clone, PartialEq, Eq)]
 pub struct MatWriteOptions {
@@ -46,6 +60,8 @@ pub struct MatWriteOptions {
     pub narrow_integers: bool,
     /// Text encoding of the id strings.
     pub chars: CharEncoding,
+    /// Where the units go.
+    pub units: MatUnits,
 }
 
 impl Default for MatWriteOptions {
@@ -56,6 +72,7 @@ impl Default for MatWriteOptions {
             layout: MatLayout::Variables,
             narrow_integers: true,
             chars: CharEncoding::Utf16,
+            units: MatUnits::TtcAssumed,
         }
     }
 }
@@ -136,6 +153,8 @@ enum Body<'a> {
     Vector(&'a [f64]),
     Text(&'a str),
     Struct(Vec<(String, Body<'a>)>),
+    /// A 1×n cell array of strings.
+    Strings(Vec<&'a str>),
 }
 
 fn matrix(o: &mut Out, name: &str, body: &Body, opt: &MatWriteOptions) {
@@ -150,6 +169,7 @@ fn matrix(o: &mut Out, name: &str, body: &Body, opt: &MatWriteOptions) {
             (class::CHAR, [1, n as u32])
         }
         Body::Struct(_) => (class::STRUCT, [1, 1]),
+        Body::Strings(items) => (class::CELL, [1, items.len() as u32]),
     };
     let mut flags = Out { be: o.be, b: Vec::new() };
     flags.u32(cls as u32);
@@ -198,6 +218,13 @@ fn matrix(o: &mut Out, name: &str, body: &Body, opt: &MatWriteOptions) {
                 m.b.extend_from_slice(&inner.b);
             }
         }
+        Body::Strings(items) => {
+            for item in items {
+                let mut inner = Out { be: o.be, b: Vec::new() };
+                matrix(&mut inner, "", &Body::Text(item), &MatWriteOptions { compress: false, ..opt.clone() });
+                m.b.extend_from_slice(&inner.b);
+            }
+        }
     }
     o.u32(ty::MATRIX);
     o.u32(m.b.len() as u32);
@@ -220,14 +247,19 @@ fn variable(o: &mut Out, name: &str, body: &Body, opt: &MatWriteOptions) {
     }
 }
 
-/// The bytes of a Level 5 `.mat` file holding `table`'s channels and ids. Channels the readers
-/// know are converted to the TTC units first (a `.mat` has no units, so its reader assumes
-/// them); an unknown unit on such a channel is an error.
+/// The bytes of a Level 5 `.mat` file holding `table`'s channels and ids. With
+/// [`MatUnits::TtcAssumed`] channels the readers know are converted to the TTC units first (a
+/// `.mat` without a units list has its reader assume them); an unknown unit on such a channel
+/// is an error.
 pub fn to_mat(table: &ChannelTable, opt: &MatWriteOptions) -> Result<Vec<u8>, ReadError> {
     let mut cols: Vec<(String, Vec<f64>)> = Vec::with_capacity(table.columns.len());
     for c in &table.columns {
         let values = match role_of(&c.name) {
-            Some(role) if !c.unit.trim().is_empty() && c.unit.trim() != role.ttc_unit() => {
+            Some(role)
+                if opt.units == MatUnits::TtcAssumed
+                    && !c.unit.trim().is_empty()
+                    && c.unit.trim() != role.ttc_unit() =>
+            {
                 let place = Place::file(&table.source).channel(&c.name);
                 let from = units::parse(&c.unit).filter(|u| u.quantity == role.quantity()).ok_or_else(|| {
                     ReadError::at(
@@ -268,6 +300,12 @@ pub fn to_mat(table: &ChannelTable, opt: &MatWriteOptions) -> Result<Vec<u8>, Re
             let fields = cols.iter().map(|(n, v)| (n.clone(), Body::Vector(v))).collect();
             variable(&mut o, name, &Body::Struct(fields), opt);
         }
+    }
+    if opt.units == MatUnits::ChannelStruct {
+        let names = table.columns.iter().map(|c| c.name.as_str()).collect();
+        let units = table.columns.iter().map(|c| c.unit.trim()).collect();
+        let list = Body::Struct(vec![("name".into(), Body::Strings(names)), ("units".into(), Body::Strings(units))]);
+        variable(&mut o, "channel", &list, opt);
     }
     for (n, v) in ids {
         variable(&mut o, n, &Body::Text(v), opt);
