@@ -7,7 +7,9 @@
 //! out, and what the rig adds that is not noise stay in the residuals as a smooth part along each
 //! sweep. This module estimates the size of that smooth part around each operating point:
 //!
-//! 1. residuals r = model − measured at the stage's points;
+//! 1. residuals r = model − measured at the stage's points, each sweep's *held out*: what the
+//!    model fitted without that sweep leaves there ([`held_out_values`], a linearised
+//!    leave-one-sweep-out), so the error where no sweep ran counts too;
 //! 2. per point i, the mean mᵢ of the residuals of its own sweep within a slip neighbourhood
 //!    (±[`SMOOTH_SLIP_ANGLE_DEG`] or ±[`SMOOTH_SLIP_RATIO`]), kᵢ points: the smooth part plus
 //!    noise/√kᵢ;
@@ -19,9 +21,10 @@
 //!    or ±[`REGION_SLIP_RATIO`]), at least 0.
 //!
 //! Between data points the model's error against the true tyre is taken to be of the size the
-//! residuals show nearby (no more, no less: nothing is tuned to a coverage). The residuals of
-//! the fitted points are in-sample: with thousands of points and a few tens of coefficients
-//! the fit absorbs a negligible part of them.
+//! held-out residuals show nearby (no more, no less: nothing is tuned to a coverage). In-sample
+//! residuals were used until 2026-12-02: a sweep alone at its cell pulls the coefficients its
+//! way and then shows no error, though the model between that cell and the next is only as good
+//! as the other sweeps make it.
 
 use mftyre::MfInput;
 
@@ -72,6 +75,68 @@ impl SlipAxis {
             SlipAxis::Ratio => REGION_SLIP_RATIO,
         }
     }
+}
+
+/// The model's values at the stage's points as each point's sweep would have them had the stage
+/// been fitted without that sweep: a linearised leave-one-sweep-out.
+///
+/// In-sample residuals show what the model misses *where it was fitted*; the error of the
+/// model where no sweep ran — between the tested loads, cambers and pressures, and at a cell
+/// only one sweep informs — does not show in them, because that sweep pulled the coefficients
+/// its way. For a least-squares fit with Jacobian J (rows Jᵢ = ∂valueᵢ/∂p at the solution) and
+/// residuals r = model − measured, leaving out the points S of one sweep moves the coefficients
+/// by δ = A₋ₛ⁺ J_Sᵀ r_S with A₋ₛ = JᵀJ − J_SᵀJ_S, and the held-out residuals are
+/// r_S + J_S δ (exact for a linear model; the stage's coefficients move little when one of
+/// many sweeps goes). A direction only that sweep informs is left where it was (A₋ₛ⁺ is the
+/// pseudo-inverse): the data without it cannot say anything there.
+///
+/// `jacobian[k][i]` = ∂values[i]/∂(k-th coefficient). Returns `values` unchanged where the
+/// Jacobian is empty or its shape does not match.
+pub fn held_out_values(points: &[Point], groups: &[usize], values: &[f64], jacobian: &[Vec<f64>]) -> Vec<f64> {
+    use nalgebra::{DMatrix, DVector};
+    let n = points.len().min(groups.len()).min(values.len());
+    let p = jacobian.len();
+    if p == 0 || jacobian.iter().any(|row| row.len() < n) {
+        return values.to_vec();
+    }
+    let res: Vec<f64> = (0..n).map(|i| values[i] - points[i].measured).collect();
+    let usable = |i: usize| res[i].is_finite() && jacobian.iter().all(|row| row[i].is_finite());
+    let gram = |idx: &mut dyn Iterator<Item = usize>| {
+        let mut a = DMatrix::<f64>::zeros(p, p);
+        for i in idx {
+            for (k, rk) in jacobian.iter().enumerate() {
+                for (l, rl) in jacobian.iter().enumerate().skip(k) {
+                    a[(k, l)] += rk[i] * rl[i];
+                }
+            }
+        }
+        for k in 0..p {
+            for l in 0..k {
+                a[(k, l)] = a[(l, k)];
+            }
+        }
+        a
+    };
+    let all = gram(&mut (0..n).filter(|&i| usable(i)));
+    let mut by_group: std::collections::BTreeMap<usize, Vec<usize>> = Default::default();
+    for i in (0..n).filter(|&i| usable(i)) {
+        by_group.entry(groups[i]).or_default().push(i);
+    }
+    let mut out = values.to_vec();
+    for idx in by_group.values() {
+        let rest = &all - gram(&mut idx.iter().copied());
+        let b = DVector::from_iterator(p, jacobian.iter().map(|row| idx.iter().map(|&i| row[i] * res[i]).sum()));
+        // Relative threshold: directions the other sweeps do not inform stay put.
+        let tol = 1e-9 * rest.diagonal().amax().max(f64::MIN_POSITIVE);
+        let Ok(delta) = rest.svd(true, true).solve(&b, tol) else { continue };
+        for &i in idx {
+            let shift: f64 = jacobian.iter().zip(delta.iter()).map(|(row, d)| row[i] * d).sum();
+            if shift.is_finite() {
+                out[i] = values[i] + shift;
+            }
+        }
+    }
+    out
 }
 
 /// The squared smooth residual at each point of one stage, ready to be averaged over regions.
@@ -235,6 +300,61 @@ mod tests {
         let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(7);
         let normal = rand_distr::Normal::new(0.0, 1.0).expect("a normal distribution");
         (0..n).map(|_| normal.sample(&mut rng)).collect()
+    }
+
+    #[test]
+    fn held_out_values_are_those_of_a_refit_without_the_sweep() {
+        // A linear model y = c₀ + c₁·fz + c₂·α fitted by least squares on five sweeps of a
+        // curved truth: leaving a sweep out by the formula must give what an explicit refit on
+        // the other four predicts for it.
+        use nalgebra::{DMatrix, DVector};
+        let e = noise(200);
+        let mut pts = Vec::new();
+        let mut groups = Vec::new();
+        for g in 0..5 {
+            for k in 0..40 {
+                let fz = 2000.0 + 1000.0 * g as f64;
+                let alpha_deg = -8.0 + 16.0 * k as f64 / 39.0;
+                let input = MfInput {
+                    fz_n: fz,
+                    kappa: 0.0,
+                    alpha_rad: alpha_deg.to_radians(),
+                    gamma_rad: 0.0,
+                    phit_per_m: 0.0,
+                    vx_mps: 16.0,
+                    p_pa: 2e5,
+                    omega_radps: 0.0,
+                };
+                let measured = 1e-4 * fz * fz + 30.0 * alpha_deg + e[g * 40 + k];
+                pts.push(Point { input, measured });
+                groups.push(g);
+            }
+        }
+        let feature = |p: &Point| [1.0, p.input.fz_n / 1000.0, p.input.alpha_rad.to_degrees()];
+        let fit = |keep: &dyn Fn(usize) -> bool| {
+            let idx: Vec<usize> = (0..pts.len()).filter(|&i| keep(groups[i])).collect();
+            let a = DMatrix::from_fn(idx.len(), 3, |r, c| feature(&pts[idx[r]])[c]);
+            let y = DVector::from_iterator(idx.len(), idx.iter().map(|&i| pts[i].measured));
+            a.svd(true, true).solve(&y, 1e-12).expect("least squares")
+        };
+        let predict = |c: &DVector<f64>, p: &Point| feature(p).iter().zip(c.iter()).map(|(f, c)| f * c).sum::<f64>();
+        let all = fit(&|_| true);
+        let values: Vec<f64> = pts.iter().map(|p| predict(&all, p)).collect();
+        let jacobian: Vec<Vec<f64>> = (0..3).map(|k| pts.iter().map(|p| feature(p)[k]).collect()).collect();
+        let held = held_out_values(&pts, &groups, &values, &jacobian);
+        for g in 0..5 {
+            let without = fit(&|h| h != g);
+            for i in (0..pts.len()).filter(|&i| groups[i] == g) {
+                let want = predict(&without, &pts[i]);
+                assert!((held[i] - want).abs() < 1e-6 * want.abs().max(1.0), "sweep {g}: {} vs {want}", held[i]);
+            }
+        }
+        // The end sweeps, which pulled the line their way, are missed by more held out.
+        let rms = |v: &[f64], g: usize| {
+            let r: Vec<f64> = (0..pts.len()).filter(|&i| groups[i] == g).map(|i| v[i] - pts[i].measured).collect();
+            (r.iter().map(|x| x * x).sum::<f64>() / r.len() as f64).sqrt()
+        };
+        assert!(rms(&held, 4) > 1.5 * rms(&values, 4), "{} vs {}", rms(&held, 4), rms(&values, 4));
     }
 
     #[test]

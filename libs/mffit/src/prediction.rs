@@ -203,10 +203,23 @@ impl PredictionMap {
 
 /// The form error of `channel` at every one of `inputs` ([`crate::form_error`]) from its
 /// residual stage's points, and which inputs are extrapolated; `None` without that stage's data.
-fn form_errors(result: &FitResult, channel: MapChannel, inputs: &[MfInput]) -> Option<(Vec<f64>, Vec<bool>)> {
+fn form_errors(
+    result: &FitResult,
+    channel: MapChannel,
+    inputs: &[MfInput],
+    threads: usize,
+) -> Option<(Vec<f64>, Vec<bool>)> {
     use crate::form_error::{FormError, SlipAxis};
     let d = result.data.iter().find(|d| d.stage == channel.residual_stage())?;
-    let values = d.channel.values_at(&result.params, &d.points);
+    let fitted = d.channel.values_at(&result.params, &d.points);
+    // Held-out residuals, not in-sample ones: they carry the error where no sweep ran.
+    let values = match result.stages.iter().find(|s| s.stage == d.stage && s.skipped.is_none()) {
+        Some(rep) => {
+            let jacobian = jacobian_at(result, d, &rep.primary_keys, &fitted, threads);
+            crate::form_error::held_out_values(&d.points, &d.groups, &fitted, &jacobian)
+        }
+        None => fitted,
+    };
     let axis = match channel {
         MapChannel::FxPure => SlipAxis::Ratio,
         MapChannel::FyPure | MapChannel::MzPure => SlipAxis::Angle,
@@ -215,6 +228,46 @@ fn form_errors(result: &FitResult, channel: MapChannel, inputs: &[MfInput]) -> O
     let worst = regions.iter().filter(|r| r.tested).filter_map(|r| r.std).fold(0.0, f64::max);
     let std = regions.iter().map(|r| if r.tested { r.std.unwrap_or(worst) } else { worst }).collect();
     Some((std, regions.iter().map(|r| !r.tested).collect()))
+}
+
+/// ∂value/∂key of the stage's channel at its points (`fitted`: its values there), one row per
+/// key: forward differences (half the model runs of central ones; the held-out shift they feed
+/// needs no more than a few digits) with [`ChannelCovariance::step`], the keys spread over
+/// `threads`, the points laid out once.
+fn jacobian_at(
+    result: &FitResult,
+    d: &crate::stages::StageData,
+    keys: &[&'static str],
+    fitted: &[f64],
+    threads: usize,
+) -> Vec<Vec<f64>> {
+    let n = d.points.len();
+    let columns = InputColumns::of(&d.points);
+    let mut rows = vec![Vec::new(); keys.len()];
+    let per_thread = keys.len().div_ceil(threads.max(1)).max(1);
+    std::thread::scope(|s| {
+        for (t, chunk) in rows.chunks_mut(per_thread).enumerate() {
+            let columns = &columns;
+            s.spawn(move || {
+                let mut p = result.params.clone();
+                let mut scratch = BatchScratch::default();
+                let mut up = vec![0.0; n];
+                for (r, row) in chunk.iter_mut().enumerate() {
+                    let key = keys[t * per_thread + r];
+                    let Some(v) = p.get(key).filter(|v| v.is_finite()) else {
+                        *row = vec![f64::NAN; n];
+                        continue;
+                    };
+                    let h = ChannelCovariance::step(v);
+                    let _ = p.set(key, v + h);
+                    d.channel.eval_batch(&p, &columns.batch(0..n), &mut scratch, &mut up);
+                    let _ = p.set(key, v);
+                    *row = up.iter().zip(fitted).map(|(u, f)| (u - f) / h).collect();
+                }
+            });
+        }
+    });
+    rows
 }
 
 /// The parameter covariance one channel's predictions depend on.
@@ -428,7 +481,7 @@ pub fn prediction_maps_since(
                 return m;
             }
             let std_param = c.stds(result, channel, &batch, threads);
-            let (std_form, extrapolated) = form_errors(result, channel, &inputs)
+            let (std_form, extrapolated) = form_errors(result, channel, &inputs, threads)
                 .unwrap_or_else(|| (vec![0.0; inputs.len()], vec![false; inputs.len()]));
             let std = std_param.iter().zip(&std_form).map(|(a, b)| a.hypot(*b)).collect();
             PredictionMap { channel, value, std, std_param, std_form, extrapolated, residual_rmse: c.residual_rmse() }
