@@ -26,11 +26,15 @@ pub struct TextTable {
     pub lines_not_read: Vec<(String, usize)>,
 }
 
-/// Fields of a line: tab-separated when the line has tabs (the TTC layout), else separated by
+/// Fields of a line: tab-separated when the line has tabs (the TTC layout), else
+/// comma- or semicolon-separated (a run re-saved as CSV from a spreadsheet), else separated by
 /// runs of spaces. Trailing empty fields (trailing tabs) are dropped.
 fn fields(line: &str) -> (Vec<&str>, bool) {
-    let mut f: Vec<&str> =
-        if line.contains('\t') { line.split('\t').map(str::trim).collect() } else { line.split_whitespace().collect() };
+    let mut f: Vec<&str> = if let Some(sep) = ['\t', ',', ';'].into_iter().find(|c| line.contains(*c)) {
+        line.split(sep).map(str::trim).collect()
+    } else {
+        line.split_whitespace().collect()
+    };
     let mut trailing = false;
     while f.last().is_some_and(|s| s.is_empty()) {
         f.pop();
@@ -137,6 +141,10 @@ pub fn parse_dat(bytes: &[u8], file: &str) -> Result<TextTable, ReadError> {
             } else {
                 let units_line = lines[i].0;
                 let mut u: Vec<String> = f.iter().map(|s| (*s).to_owned()).collect();
+                // Separated by spaces, `deg C` / `deg F` (other rounds' spelling) came apart.
+                if u.len() > names.len() && !lines[i].1.contains(['\t', ',', ';']) {
+                    u = rejoin_degrees(u);
+                }
                 if u.len() > names.len() {
                     warn.push(
                         "units count",
@@ -269,9 +277,45 @@ fn clip(s: &str) -> String {
     if s.chars().count() > 40 { format!("{}…", s.chars().take(40).collect::<String>()) } else { s.to_owned() }
 }
 
+/// `deg` followed by `C` or `F` is one unit, `deg C`, in a units line split at spaces.
+fn rejoin_degrees(units: Vec<String>) -> Vec<String> {
+    let mut out: Vec<String> = Vec::with_capacity(units.len());
+    for u in units {
+        match out.last_mut() {
+            Some(last) if last.eq_ignore_ascii_case("deg") && matches!(u.as_str(), "C" | "F" | "c" | "f") => {
+                last.push(' ');
+                last.push_str(&u);
+            }
+            _ => out.push(u),
+        }
+    }
+    out
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn comma_semicolon_and_space_separated_files_read_like_tab_separated_ones() {
+        let tabbed = parse_dat(CLEAN.as_bytes(), "a.dat").unwrap();
+        for sep in [",", ";", "   "] {
+            let text = CLEAN.replace('\t', sep);
+            let t = parse_dat(text.as_bytes(), "c.dat").unwrap_or_else(|e| panic!("{sep:?}: {e}"));
+            assert_eq!(t.table.rows(), tabbed.table.rows(), "{sep:?}");
+            for (a, b) in tabbed.table.columns.iter().zip(&t.table.columns) {
+                assert_eq!((&a.name, &a.unit, &a.values), (&b.name, &b.unit, &b.values), "{sep:?}");
+            }
+            // The title's own commas and semicolons do not make it a names line.
+            assert_eq!(t.table.tire_id, tabbed.table.tire_id, "{sep:?}");
+        }
+        // `deg C` split at the space is one unit again.
+        let text = "ET  TSTC  AMBTMP  FZ  SA\n s  deg C  deg F  N  deg\n0  50  86  -1100  0.5\n";
+        let t = parse_dat(text.as_bytes(), "d.dat").unwrap();
+        let unit = |n: &str| t.table.column(n).unwrap().unit.clone();
+        assert_eq!([unit("TSTC"), unit("AMBTMP"), unit("FZ"), unit("SA")], ["deg C", "deg F", "N", "deg"]);
+        assert!(t.warnings.iter().all(|w| w.message.starts_with("no title line")), "{:?}", t.warnings);
+    }
 
     const CLEAN: &str = "TIRF Data File: Project 1; Run 4; Tire_Name=Test 20.5x7.0-13, R25B; Rim_Width=7.0\r\n\
         ET\tV\tSA\tFZ\tP\r\n\
