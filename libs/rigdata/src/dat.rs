@@ -27,10 +27,10 @@ pub struct TextTable {
 }
 
 /// Fields of a line: tab-separated when the line has tabs (the TTC layout), else
-/// comma- or semicolon-separated (a run re-saved as CSV from a spreadsheet), else separated by
-/// runs of spaces. Trailing empty fields (trailing tabs) are dropped.
+/// semicolon- or comma-separated (a run re-saved as CSV from a spreadsheet; a semicolon file's
+/// values may have decimal commas), else separated by runs of spaces. Trailing empty fields (trailing tabs) are dropped.
 fn fields(line: &str) -> (Vec<&str>, bool) {
-    let mut f: Vec<&str> = if let Some(sep) = ['\t', ',', ';'].into_iter().find(|c| line.contains(*c)) {
+    let mut f: Vec<&str> = if let Some(sep) = ['\t', ';', ','].into_iter().find(|c| line.contains(*c)) {
         line.split(sep).map(str::trim).collect()
     } else {
         line.split_whitespace().collect()
@@ -225,7 +225,11 @@ pub fn parse_dat(bytes: &[u8], file: &str) -> Result<TextTable, ReadError> {
             );
         }
         for (k, s) in f.iter().take(n).enumerate() {
-            let v = match s.parse::<f64>() {
+            // A semicolon-separated file from a spreadsheet writes decimal commas (`0,02`).
+            let v = match s.parse::<f64>().or_else(|e| match s.replacen(',', ".", 1).parse::<f64>() {
+                Ok(v) if !s.contains('.') => Ok(v),
+                _ => Err(e),
+            }) {
                 Ok(v) => v,
                 Err(_) => {
                     warn.push(
@@ -309,6 +313,12 @@ mod tests {
             // The title's own commas and semicolons do not make it a names line.
             assert_eq!(t.table.tire_id, tabbed.table.tire_id, "{sep:?}");
         }
+        // Semicolons with decimal commas, as a spreadsheet in many locales writes them.
+        let text = CLEAN.replace('.', ",").replace('\t', ";");
+        let t = parse_dat(text.as_bytes(), "e.dat").unwrap();
+        assert_eq!(t.table.column("SA").unwrap().values, [0.5, 0.6]);
+        assert_eq!(t.table.column("V").unwrap().values, [40.1, 40.0]);
+        assert!(t.warnings.is_empty(), "{:?}", t.warnings);
         // `deg C` split at the space is one unit again.
         let text = "ET  TSTC  AMBTMP  FZ  SA\n s  deg C  deg F  N  deg\n0  50  86  -1100  0.5\n";
         let t = parse_dat(text.as_bytes(), "d.dat").unwrap();
