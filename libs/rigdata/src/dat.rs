@@ -49,7 +49,37 @@ fn is_number(s: &str) -> bool {
 
 /// How many of a line's fields are channel names the readers know.
 fn known_names(f: &[&str]) -> usize {
-    f.iter().filter(|s| role_of(s).is_some()).count()
+    f.iter().filter(|s| role_of(name_and_unit(s).0).is_some()).count()
+}
+
+/// A channel header with its unit in brackets, as re-exported files write them (`FZ [N]`,
+/// `SA (deg)`, `ET[s]`): the name and the unit; a plain name has no unit.
+fn name_and_unit(field: &str) -> (&str, Option<&str>) {
+    let f = field.trim();
+    for (open, close) in [('[', ']'), ('(', ')')] {
+        if let Some(body) = f.strip_suffix(close)
+            && let Some(at) = body.rfind(open)
+            && at > 0
+        {
+            return (body[..at].trim(), Some(body[at + 1..].trim()));
+        }
+    }
+    (f, None)
+}
+
+/// A names line split at spaces has `FZ [N]` as two tokens: a token that is only a bracketed
+/// unit belongs to the name before it.
+fn rejoin_bracketed(f: Vec<&str>, line: &str) -> Vec<String> {
+    let spaced = !line.contains(['\t', ';', ',']);
+    let mut out: Vec<String> = Vec::with_capacity(f.len());
+    for t in f {
+        let bracket_only = (t.starts_with('[') && t.ends_with(']')) || (t.starts_with('(') && t.ends_with(')'));
+        match out.last_mut() {
+            Some(last) if spaced && bracket_only => last.push_str(t),
+            _ => out.push(t.to_owned()),
+        }
+    }
+    out
 }
 
 /// Lines of the file (without their `\n` / `\r\n`), numbered from 1. A file with only `\r`
@@ -86,6 +116,8 @@ pub fn parse_dat(bytes: &[u8], file: &str) -> Result<TextTable, ReadError> {
         .copied()
         .find(|&i| {
             let (f, _) = fields(lines[i].1);
+            let f = rejoin_bracketed(f, lines[i].1);
+            let f: Vec<&str> = f.iter().map(String::as_str).collect();
             known_names(&f) >= 2 && !f.iter().any(|s| is_number(s))
         })
         .ok_or_else(|| {
@@ -103,6 +135,9 @@ pub fn parse_dat(bytes: &[u8], file: &str) -> Result<TextTable, ReadError> {
     };
     let names_line = lines[names_at].0;
     let (raw_names, _) = fields(lines[names_at].1);
+    let raw_names = rejoin_bracketed(raw_names, lines[names_at].1);
+    let header_units: Vec<Option<String>> = raw_names.iter().map(|n| name_and_unit(n).1.map(str::to_owned)).collect();
+    let raw_names: Vec<&str> = raw_names.iter().map(|n| name_and_unit(n).0).collect();
     let mut names: Vec<String> = Vec::with_capacity(raw_names.len());
     for (i, n) in raw_names.iter().enumerate() {
         let mut name = if n.is_empty() {
@@ -131,7 +166,10 @@ pub fn parse_dat(bytes: &[u8], file: &str) -> Result<TextTable, ReadError> {
     let (units, data_from) = match next {
         Some(i) => {
             let (f, _) = fields(lines[i].1);
-            if f.iter().all(|s| s.is_empty() || is_number(s)) {
+            if f.iter().all(|s| s.is_empty() || is_number(s)) && header_units.iter().any(Option::is_some) {
+                // The units came with the names (`FZ [N]`).
+                (header_units.iter().map(|u| u.clone().unwrap_or_default()).collect(), i)
+            } else if f.iter().all(|s| s.is_empty() || is_number(s)) {
                 warn.push(
                     "no units",
                     Place::line(file, lines[i].0),
@@ -319,6 +357,16 @@ mod tests {
         assert_eq!(t.table.column("SA").unwrap().values, [0.5, 0.6]);
         assert_eq!(t.table.column("V").unwrap().values, [40.1, 40.0]);
         assert!(t.warnings.is_empty(), "{:?}", t.warnings);
+        // Units in brackets with the names and no units line, as re-exported files write them.
+        for header in ["ET [s]\tV [kph]\tSA (deg)\tFZ[N]\tP [kPa]", "ET [s]  V [kph]  SA (deg)  FZ[N]  P [kPa]"] {
+            let text = format!("{header}\n0\t40.1\t0.5\t-1100\t83\n")
+                .replace('\t', if header.contains('\t') { "\t" } else { "  " });
+            let t = parse_dat(text.as_bytes(), "h.dat").unwrap_or_else(|e| panic!("{header}: {e}"));
+            let unit = |n: &str| t.table.column(n).unwrap_or_else(|| panic!("{header}: {n}")).unit.clone();
+            assert_eq!([unit("ET"), unit("V"), unit("SA"), unit("FZ"), unit("P")], ["s", "kph", "deg", "N", "kPa"]);
+            assert_eq!(t.table.column("SA").unwrap().values, [0.5], "{header}");
+            assert!(!t.warnings.iter().any(|w| w.message.contains("no units")), "{:?}", t.warnings);
+        }
         // `deg C` split at the space is one unit again.
         let text = "ET  TSTC  AMBTMP  FZ  SA\n s  deg C  deg F  N  deg\n0  50  86  -1100  0.5\n";
         let t = parse_dat(text.as_bytes(), "d.dat").unwrap();
