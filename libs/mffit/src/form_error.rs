@@ -271,22 +271,26 @@ const TESTED_SLIP_RATIO: f64 = 0.02;
 mod tests {
     use super::*;
 
+    /// A free-rolling point at load `fz_n` and slip angle `alpha_deg`.
+    fn free_rolling(fz_n: f64, alpha_deg: f64) -> MfInput {
+        MfInput {
+            fz_n,
+            kappa: 0.0,
+            alpha_rad: alpha_deg.to_radians(),
+            gamma_rad: 0.0,
+            phit_per_m: 0.0,
+            vx_mps: 16.0,
+            p_pa: 2e5,
+            omega_radps: 0.0,
+        }
+    }
+
     fn sweep(group_bias: impl Fn(f64) -> f64, noise: &[f64]) -> (Vec<Point>, Vec<usize>, Vec<f64>) {
         let mut pts = Vec::new();
         let mut values = Vec::new();
         for (i, e) in noise.iter().enumerate() {
             let alpha_deg = -10.0 + 20.0 * i as f64 / (noise.len() - 1) as f64;
-            let input = MfInput {
-                fz_n: 4000.0,
-                kappa: 0.0,
-                alpha_rad: alpha_deg.to_radians(),
-                gamma_rad: 0.0,
-                phit_per_m: 0.0,
-                vx_mps: 16.0,
-                p_pa: 2e5,
-                omega_radps: 0.0,
-            };
-            pts.push(Point { input, measured: 0.0 });
+            pts.push(Point { input: free_rolling(4000.0, alpha_deg), measured: 0.0 });
             values.push(group_bias(alpha_deg) + e);
         }
         let groups = vec![0; pts.len()];
@@ -315,18 +319,8 @@ mod tests {
             for k in 0..40 {
                 let fz = 2000.0 + 1000.0 * g as f64;
                 let alpha_deg = -8.0 + 16.0 * k as f64 / 39.0;
-                let input = MfInput {
-                    fz_n: fz,
-                    kappa: 0.0,
-                    alpha_rad: alpha_deg.to_radians(),
-                    gamma_rad: 0.0,
-                    phit_per_m: 0.0,
-                    vx_mps: 16.0,
-                    p_pa: 2e5,
-                    omega_radps: 0.0,
-                };
                 let measured = 1e-4 * fz * fz + 30.0 * alpha_deg + e[g * 40 + k];
-                pts.push(Point { input, measured });
+                pts.push(Point { input: free_rolling(fz, alpha_deg), measured });
                 groups.push(g);
             }
         }
