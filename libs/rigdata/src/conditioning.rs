@@ -2,10 +2,12 @@
 //! sweeps reaching only a fraction of their kind's typical reach (the rig's short conditioning
 //! sweeps), and — in every kind of run — the sweeps opening a run or a pressure at one cell
 //! that is swept again later (the tyre brought to temperature before the measurement proper;
-//! a real drive/brake run opened with five full sweeps at 1,100 N).
+//! a real drive/brake run opened with five full sweeps at 1,100 N), and the sweeps a run opens
+//! with on a cold tyre whose cells are swept again once the tread temperature has settled.
 
 use mffit::Cell;
 
+use crate::interpret::Signals;
 use crate::sweeps::{Conditioning, Exclusion, FoundSweep, Swept};
 
 /// Two sweeps were run at the same cell (within what a rig holds between repeats).
@@ -96,6 +98,80 @@ fn mark_block(block: &mut [FoundSweep]) {
     if full >= MIN_LEADING && again {
         for s in &mut block[first..lead_end] {
             s.conditioning.get_or_insert(Conditioning::LeadingRepeat);
+        }
+    }
+}
+
+/// The tread has settled when the temperature at a sweep's start is less than this above the
+/// previous sweep's, K: a cold tyre gains tens of kelvin over its first sweeps, a settled one a
+/// few (a drive/brake run climbing 38 → 90 °C over some sixty sweeps gains about one a sweep).
+pub const SETTLED_RISE_K: f64 = 5.0;
+
+/// A sweep begun this far below its run's typical start temperature is cold, K; a smaller gap is
+/// the ordinary spread between cells (a sweep after a 1,540 N one starts a few kelvin warmer).
+pub const COLD_BELOW_RUN_K: f64 = 8.0;
+
+/// Most sweeps a cold start may take: beyond them the run is heating up, not settling.
+const MAX_COLD_START: usize = 6;
+
+/// The tread temperature as each sweep begins, °C: the median over its first rows (a twentieth
+/// of the sweep, at least five) of the mean of the inner, centre and outer readings present;
+/// NaN where the file has none.
+pub fn start_tread_temps(sig: &Signals, sweeps: &[FoundSweep]) -> Vec<f64> {
+    let tread = |r: usize| {
+        let t: Vec<f64> = [&sig.temp_inner_c, &sig.temp_centre_c, &sig.temp_outer_c]
+            .iter()
+            .filter_map(|c| c.get(r).copied())
+            .filter(|x| x.is_finite())
+            .collect();
+        if t.is_empty() { f64::NAN } else { t.iter().sum::<f64>() / t.len() as f64 }
+    };
+    sweeps
+        .iter()
+        .map(|s| {
+            let rows = (s.last + 1 - s.first).div_ceil(20).max(5);
+            let mut t: Vec<f64> =
+                (s.first..=s.last.min(s.first + rows - 1)).map(tread).filter(|x| x.is_finite()).collect();
+            if t.is_empty() {
+                return f64::NAN;
+            }
+            t.sort_by(f64::total_cmp);
+            t[t.len() / 2]
+        })
+        .collect()
+}
+
+/// The sweeps a run opens with while the tread is still warming fast — each starting more than
+/// [`SETTLED_RISE_K`] below the next and more than [`COLD_BELOW_RUN_K`] below the run's median
+/// start, the warming then settling within [`MAX_COLD_START`] sweeps — are conditioning where
+/// their cell is swept again after the tread settled: nothing of the plan is lost, and what a
+/// cold tyre measured is not fitted as the tyre.
+pub fn mark_cold_start(sweeps: &mut [FoundSweep]) {
+    let start_c: Vec<f64> = sweeps.iter().map(|s| s.tread_start_c).collect();
+    let order: Vec<usize> =
+        (0..sweeps.len()).filter(|&i| sweeps[i].conditioning.is_none() && start_c[i].is_finite()).collect();
+    let mut typical: Vec<f64> = order.iter().map(|&i| start_c[i]).collect();
+    if typical.len() < 3 {
+        return;
+    }
+    typical.sort_by(f64::total_cmp);
+    let run_c = typical[typical.len() / 2];
+    let rise = |w: &[usize]| start_c[w[1]] - start_c[w[0]];
+    let cold =
+        order.windows(2).take_while(|w| rise(w) > SETTLED_RISE_K && start_c[w[0]] < run_c - COLD_BELOW_RUN_K).count();
+    // A cold start settles: the rise after it is small. A run heating at that pace throughout
+    // (a pure longitudinal run to large slip gains 7 K a sweep) has no cold start, it runs hot.
+    let settles = order.windows(2).nth(cold).is_some_and(|w| rise(w) <= SETTLED_RISE_K);
+    if cold > MAX_COLD_START || !settles {
+        return;
+    }
+    for k in 0..cold {
+        let i = order[k];
+        let settled_again = order[cold..]
+            .iter()
+            .any(|&m| sweeps[m].swept == sweeps[i].swept && same_cell(&sweeps[m].cell, &sweeps[i].cell));
+        if settled_again {
+            sweeps[i].conditioning = Some(Conditioning::ColdStart);
         }
     }
 }

@@ -81,6 +81,10 @@ pub struct FixtureSpec {
     /// Slip-ratio reach of the drive/brake sweeps (0.2 in TTC runs, 0.65 in pure longitudinal
     /// runs of some rounds).
     pub kappa_reach: f64,
+    /// The tyre starts this much colder than its running tread temperature, K, and closes the
+    /// gap as it is swept (by e⁻¹ every 1.2 sweep durations of sweeping): a run begun on a cold
+    /// tyre; 0 for a tyre brought to temperature before the file begins.
+    pub cold_start_k: f64,
 }
 
 /// A camber sweep: camber stepped at a held slip angle.
@@ -127,6 +131,7 @@ impl FixtureSpec {
             warmup_sweeps: 0,
             no_settle_after_sweeps: false,
             kappa_reach: 0.2,
+            cold_start_k: 0.0,
         }
     }
 
@@ -150,6 +155,7 @@ impl FixtureSpec {
             warmup_sweeps: 0,
             no_settle_after_sweeps: false,
             kappa_reach: 0.2,
+            cold_start_k: 0.0,
         }
     }
 }
@@ -179,6 +185,8 @@ struct State {
     ia_deg: f64,
     sa_deg: f64,
     sl: f64,
+    /// Time spent sweeping so far, s (what warms a cold tyre).
+    swept_s: f64,
 }
 
 struct Builder {
@@ -215,6 +223,7 @@ impl Builder {
                 ia_deg: l(from.ia_deg, to.ia_deg),
                 sa_deg: l(from.sa_deg, to.sa_deg),
                 sl: l(from.sl, to.sl),
+                swept_s: from.swept_s,
             };
             self.t += self.dt;
             self.rows.push((self.t, self.s));
@@ -234,7 +243,7 @@ impl Builder {
             } else {
                 1.0 - 4.0 * (f - 0.75)
             };
-            let mut s = base;
+            let mut s = State { swept_s: base.swept_s + dur * f, ..base };
             if on_sa {
                 s.sa_deg = amp * x;
                 s.fz_n = base.fz_n * (1.0 + self.wander * x * x * if x > 0.0 { 1.0 } else { -0.65 });
@@ -245,7 +254,7 @@ impl Builder {
             self.t += self.dt;
             self.rows.push((self.t, s));
         }
-        self.s = base;
+        self.s = State { swept_s: base.swept_s + dur, ..base };
     }
 }
 
@@ -255,7 +264,15 @@ pub fn ttc_run(spec: &FixtureSpec) -> FixtureRun {
         wander: spec.fz_wander,
         dt: 1.0 / spec.rate_hz,
         t: -1.0 / spec.rate_hz,
-        s: State { v_kph: 0.0, fz_n: 0.0, p_kpa: spec.pressures_kpa[0], ia_deg: 0.0, sa_deg: 0.0, sl: 0.0 },
+        s: State {
+            v_kph: 0.0,
+            fz_n: 0.0,
+            p_kpa: spec.pressures_kpa[0],
+            ia_deg: 0.0,
+            sa_deg: 0.0,
+            sl: 0.0,
+            swept_s: 0.0,
+        },
         rows: Vec::new(),
     };
     let mut sweeps = Vec::new();
@@ -289,6 +306,7 @@ pub fn ttc_run(spec: &FixtureSpec) -> FixtureRun {
             camber_sweep: false,
         });
     };
+    let mut opens_cold = spec.cold_start_k > 0.0;
     for &p in &spec.pressures_kpa {
         // Pressure set at light load.
         b.ramp(2.0, State { fz_n: 220.0, sa_deg: 0.0, sl: 0.0, ..b.s });
@@ -314,6 +332,12 @@ pub fn ttc_run(spec: &FixtureSpec) -> FixtureRun {
                 for &fz in &spec.loads_n {
                     let to = State { fz_n: fz, ia_deg: ia, sa_deg: -sa, ..b.s };
                     plan(&mut b, &mut sweeps, to, false, amp);
+                    if let Some(s) = sweeps.last_mut().filter(|_| opens_cold) {
+                        // The run's first full sweep, on a tread still well below its running
+                        // temperature; its cell is swept again at the end of the pressure.
+                        s.conditioning = true;
+                        opens_cold = false;
+                    }
                 }
             }
         }
@@ -394,7 +418,8 @@ fn tabulate(spec: &FixtureSpec, rows: &[(f64, State)]) -> ChannelTable {
         // angles, about −0.07 at 12° and 2 kN), besides its offset and noise.
         let sr_free = -0.01 - 0.07 * (s.sa_deg / 12.0).powi(2) * (fz / 2000.0);
         let sr = if rolling { kappa + sr_free + nz.normal(0.006) } else { -0.9 + nz.normal(0.01) };
-        let temp = 45.0 + 11.0 * t / t_end + if spec.cornering { 0.0 } else { 40.0 * t / t_end - 7.0 };
+        let temp = 45.0 + 11.0 * t / t_end + if spec.cornering { 0.0 } else { 40.0 * t / t_end - 7.0 }
+            - spec.cold_start_k * (-s.swept_s / (1.2 * spec.sweep_s)).exp();
         // SAE as written: FY, FZ, SA, MZ flip.
         let vals = [
             *t,
@@ -573,6 +598,12 @@ pub fn quirk_fixtures() -> Vec<QuirkFixture> {
             file: "warmup_drive_brake.dat",
             quirk: "five full warm-up sweeps at 1,100 N opening a drive/brake run, 1,100 N swept again later",
             spec: FixtureSpec { loads_n: vec![660.0, 1100.0], warmup_sweeps: 5, ..FixtureSpec::drive_brake() },
+            mat_units: MatUnits::TtcAssumed,
+        },
+        QuirkFixture {
+            file: "cold_start_cornering.dat",
+            quirk: "a cornering run begun on a cold tyre (its tread 30 K below its running temperature), the first cell swept again at the end of the pressure",
+            spec: FixtureSpec { cold_start_k: 30.0, ..FixtureSpec::cornering() },
             mat_units: MatUnits::TtcAssumed,
         },
         QuirkFixture {

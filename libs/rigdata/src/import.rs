@@ -128,12 +128,7 @@ fn read_file_unlabelled(path: &Path, opt: &ReadOptions) -> Result<(Dataset, File
 /// they are.
 fn label(d: &mut Dataset, ins: &mut Inspection, fraction: f64) {
     // Rows and segments are in the same order, file by file.
-    let leading: Vec<bool> = ins
-        .files
-        .iter()
-        .flat_map(|f| &f.sweeps)
-        .map(|r| r.conditioning_reason.as_deref() == Some(Conditioning::LeadingRepeat.name()))
-        .collect();
+    let leading: Vec<bool> = ins.files.iter().flat_map(|f| &f.sweeps).map(|r| r.conditioning_by_plan).collect();
     let camber = |s: &Segment| s.section == CAMBER_SECTION;
     for sa in [true, false] {
         let fam = |s: &Segment| !camber(s) && s.cell.is_some_and(|c| (c.kind == SweepKind::Cornering) == sa);
@@ -403,6 +398,8 @@ fn from_table(
             kind: if camber { CAMBER_SECTION.into() } else { w.cell.kind.name().into() },
             conditioning: w.conditioning.is_some(),
             conditioning_reason: w.conditioning.map(|c| c.name().to_owned()),
+            conditioning_by_plan: w.conditioning.is_some_and(Conditioning::by_plan),
+            tread_start_c: Some(w.tread_start_c).filter(|t| t.is_finite()),
             first_row: line_of(w.first),
             last_row: line_of(w.last),
             rows: w.last + 1 - w.first,

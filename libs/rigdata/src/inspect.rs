@@ -7,6 +7,10 @@ use serde::Serialize;
 
 use crate::error::Warning;
 use crate::interpret::ChannelUse;
+use crate::sweeps::Conditioning;
+
+/// The reason a cold start's sweeps are conditioning, as reported.
+const COLD_START: &str = Conditioning::ColdStart.name();
 
 /// One sweep found.
 #[derive(Debug, Clone, PartialEq, Default, Serialize)]
@@ -20,6 +24,10 @@ pub struct SweepRow {
     /// Why it is a conditioning sweep (`short reach`, `leading sweeps at a cell swept again
     /// later`).
     pub conditioning_reason: Option<String>,
+    /// Conditioning by the run's plan (warm-up sweeps, a cold start), whatever its reach.
+    pub conditioning_by_plan: bool,
+    /// The tread temperature as it begins, °C, where the file has tread temperatures.
+    pub tread_start_c: Option<f64>,
     /// First line (text files) or row (1-based, `.mat`).
     pub first_row: usize,
     /// Last line or row.
@@ -234,6 +242,25 @@ impl FileReport {
             let _ = writeln!(
                 s,
                 "\nconditioning {leading} sweeps open the run at a cell swept again later: warm-up, not fitted"
+            );
+        }
+        let cold: Vec<f64> = self
+            .sweeps
+            .iter()
+            .filter(|w| w.conditioning_reason.as_deref() == Some(COLD_START))
+            .filter_map(|w| w.tread_start_c)
+            .collect();
+        if let (Some(first), Some(last)) = (cold.first(), cold.last()) {
+            let settled = self.sweeps.iter().filter(|w| !w.conditioning).find_map(|w| w.tread_start_c);
+            let (n, temps) = match cold.len() {
+                1 => ("1 sweep".to_owned(), format!("at {first:.0} °C")),
+                n => (format!("{n} sweeps"), format!("{first:.0} → {last:.0} °C at their starts")),
+            };
+            let _ = writeln!(
+                s,
+                "\nconditioning {n} begun before the tread temperature settled ({temps}{}), swept again later: cold \
+                 tyre, not fitted",
+                settled.map(|t| format!("; the first sweep fitted starts at {t:.0} °C")).unwrap_or_default()
             );
         }
         let excluded: usize = self.excluded.iter().map(|e| e.1).sum();

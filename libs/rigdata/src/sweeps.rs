@@ -53,6 +53,9 @@ pub struct SweepOptions {
     /// A sweep reaching less than this fraction of its kind's typical reach is a conditioning
     /// (warm-up) sweep.
     pub conditioning_fraction: f64,
+    /// Mark the sweeps a run opens with on a cold tyre as conditioning where their cell is swept
+    /// again (`conditioning::mark_cold_start`).
+    pub cold_start: bool,
     /// `SR` (no `SL` in the file) moving is a slip-ratio sweep only where the wheel is driven or
     /// braked: |FX| above this fraction of FZ in at least a tenth of the rows.
     pub sr_driven_fx_fraction: f64,
@@ -84,6 +87,7 @@ impl Default for SweepOptions {
             idle_split_s: 2.0,
             min_sweep_s: 1.0,
             conditioning_fraction: 0.5,
+            cold_start: true,
             sr_driven_fx_fraction: 0.15,
             camber_sweep_min_deg: 1.5,
             fz_wander_fraction: 0.3,
@@ -172,15 +176,24 @@ pub enum Conditioning {
     /// One of several sweeps opening a run (or a pressure) at one cell that is swept again
     /// later: the tyre being brought to temperature.
     LeadingRepeat,
+    /// Begun before the tread temperature settled (a cold tyre at the start of a run), at a
+    /// cell swept again later on the settled tyre.
+    ColdStart,
 }
 
 impl Conditioning {
     /// Reason in reports.
-    pub fn name(self) -> &'static str {
+    pub const fn name(self) -> &'static str {
         match self {
             Conditioning::ShortReach => "short reach",
             Conditioning::LeadingRepeat => "leading sweeps at a cell swept again later",
+            Conditioning::ColdStart => "begun before the tread temperature settled, cell swept again later",
         }
+    }
+
+    /// Kept as conditioning whatever its reach: the run's plan, not the sweep's size, says so.
+    pub fn by_plan(self) -> bool {
+        matches!(self, Conditioning::LeadingRepeat | Conditioning::ColdStart)
     }
 }
 
@@ -199,6 +212,8 @@ pub struct FoundSweep {
     pub first: usize,
     /// Last row, inclusive.
     pub last: usize,
+    /// The tread temperature as it begins, °C (NaN without tread temperatures).
+    pub tread_start_c: f64,
 }
 
 /// The outcome of [`find_sweeps`].
@@ -762,7 +777,15 @@ pub fn find_sweeps(
             slip_reach: reach,
         };
         why[f..=l].iter_mut().for_each(|w| *w = None);
-        sweeps.push(FoundSweep { cell, swept, conditioning: None, camber_span_deg, first: f, last: l });
+        sweeps.push(FoundSweep {
+            cell,
+            swept,
+            conditioning: None,
+            camber_span_deg,
+            first: f,
+            last: l,
+            tread_start_c: f64::NAN,
+        });
     }
     // Rows of moving pieces outside any sweep: a sweep cut off, or a slip angle being set.
     mark_incomplete(&mut why, &sa_deg, opt.sa_zero_deg);
@@ -770,6 +793,13 @@ pub fn find_sweeps(
     crate::conditioning::mark_short_reach(&mut sweeps, opt.conditioning_fraction);
     let mut sweeps = crate::conditioning::merge_conditioning(sweeps, &why);
     crate::conditioning::mark_leading_repeats(&mut sweeps);
+    let starts = crate::conditioning::start_tread_temps(sig, &sweeps);
+    for (s, t) in sweeps.iter_mut().zip(starts) {
+        s.tread_start_c = t;
+    }
+    if opt.cold_start {
+        crate::conditioning::mark_cold_start(&mut sweeps);
+    }
     // Back-to-back sweeps share their boundary row: give it to the first.
     for k in 1..sweeps.len() {
         let prev_last = sweeps[k - 1].last;

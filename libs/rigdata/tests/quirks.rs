@@ -2,13 +2,14 @@
 //! runs"), each read from a synthetic TTC-like run that has it (`rigdata::fixture`): unit
 //! spellings, a `.mat` without units, US units, `SR` in cornering/camber tests of older rounds,
 //! load wandering during sweeps, camber sweeps, pure longitudinal runs to ±0.65, warm-up sweeps
-//! opening a drive/brake run — and `inspect` accounting for every row of each.
+//! opening a drive/brake run, a run begun on a cold tyre — and `inspect` accounting for every row of each.
 
 use mffit::{DataKind, Dataset, Procedure, SweepKind};
 use rigdata::fixture::{CamberSweep, FixtureRun, FixtureSpec, UnitStyle, ttc_run};
 use rigdata::import::{CAMBER_SECTION, FileFormat, ReadOptions, read_bytes};
 use rigdata::inspect::{FileReport, Inspection};
 use rigdata::mat::{MatUnits, MatWriteOptions, to_mat};
+use rigdata::sweeps::Conditioning;
 use rigdata::table::{DatLayout, to_dat};
 
 fn import(bytes: &[u8], name: &str, format: FileFormat) -> (Dataset, FileReport) {
@@ -48,7 +49,9 @@ fn assert_found(run: &FixtureRun, d: &Dataset, r: &FileReport) {
         assert!((c.gamma_rad.to_degrees() - p.ia_deg).abs() < 0.15, "{}: IA", s.sweep);
         assert!((c.alpha_rad.to_degrees() - p.sa_deg).abs() < 0.15, "{}: SA {}", s.sweep, c.alpha_rad.to_degrees());
         assert!((c.vx_mps * 3.6 - 40.0).abs() < 1.0, "{}: V {} kph", s.sweep, c.vx_mps * 3.6);
-        assert!(s.samples.iter().all(|x| x.fz_n > 0.0 && x.p_pa > 5e4 && x.temp_c > 30.0 && x.temp_c < 110.0));
+        // Temperatures in °C (a cold start's conditioning sweeps may read below 30 °C).
+        let t_min = if s.kind == DataKind::WarmUp { 0.0 } else { 30.0 };
+        assert!(s.samples.iter().all(|x| x.fz_n > 0.0 && x.p_pa > 5e4 && x.temp_c > t_min && x.temp_c < 110.0));
     }
     assert_accounted(r);
 }
@@ -311,4 +314,29 @@ fn inspect_accounts_for_lines_it_could_not_read() {
     let text = Inspection { files: vec![r.clone()] }.to_text(false);
     assert!(text.contains("lines not read as rows"), "{text}");
     assert!(r.warnings.iter().any(|w| w.to_string().starts_with("odd.dat:901")), "{:?}", r.warnings);
+}
+
+#[test]
+fn sweeps_begun_on_a_cold_tyre_are_conditioning_where_their_cell_is_swept_again() {
+    // The tread starts 30 K below its running temperature; the first full sweep (1,100 N) is
+    // swept again at the end of the pressure, the second (660 N) only at the other pressure.
+    let spec = FixtureSpec { cold_start_k: 30.0, ..FixtureSpec::cornering() };
+    let run = ttc_run(&spec);
+    let (d, r) = import_dat(&run, "cold_start_cornering.dat");
+    assert_found(&run, &d, &r);
+    let cold: Vec<&rigdata::inspect::SweepRow> =
+        r.sweeps.iter().filter(|s| s.conditioning_reason.as_deref() == Some(Conditioning::ColdStart.name())).collect();
+    assert_eq!(cold.len(), 1, "{:#?}", r.sweeps);
+    assert!((cold[0].fz_n - 1100.0).abs() < 60.0 && (cold[0].p_kpa - 83.0).abs() < 2.0, "{:?}", cold[0]);
+    let first_fitted = r.sweeps.iter().find(|s| !s.conditioning).expect("a fitted sweep");
+    let (t_cold, t_next) = (cold[0].tread_start_c.expect("tread"), first_fitted.tread_start_c.expect("tread"));
+    assert!(t_next - t_cold > 5.0, "{t_cold} → {t_next}");
+    let text = Inspection { files: vec![r.clone()] }.to_text(false);
+    assert!(text.contains("conditioning 1 sweep begun before the tread temperature settled (at 34 °C"), "{text}");
+    // The same run on a tyre brought to temperature first: no cold start.
+    let (_, warm) = import_dat(&ttc_run(&FixtureSpec::cornering()), "warm_cornering.dat");
+    assert!(warm.sweeps.iter().all(|s| s.conditioning_reason.as_deref() != Some(Conditioning::ColdStart.name())));
+    // Nor in a drive/brake run whose tread climbs tens of kelvin through the run.
+    let (_, db) = import_dat(&ttc_run(&FixtureSpec::drive_brake()), "db.dat");
+    assert!(db.sweeps.iter().all(|s| s.conditioning_reason.as_deref() != Some(Conditioning::ColdStart.name())));
 }

@@ -200,8 +200,16 @@ fn import_if_measured(path: &std::path::Path, out: &std::path::Path) -> Result<P
     if !measured {
         return Ok(path.to_path_buf());
     }
-    let import = rigdata::read_path(path, &rigdata::ReadOptions::default())
-        .with_context(|| format!("reading {}", path.display()))?;
+    // A sweep begun on a cold tyre stays a measurement here: a visit in another thermal state is
+    // what tells a state effect from the operating point, and left out of the base fit (as
+    // `tyrerig fit` leaves it out) an outsider's thermal effect in relaxing TTC-style runs lost
+    // its significance (bootstrap p 0.005 → 0.0075 against α/m = 0.0063, its gain then resting
+    // on that one sweep; `doctor_cli::thermal_hidden_in_relaxing_ttc_runs_is_named_beside_transient`).
+    let read = rigdata::ReadOptions {
+        sweeps: rigdata::sweeps::SweepOptions { cold_start: false, ..Default::default() },
+        ..Default::default()
+    };
+    let import = rigdata::read_path(path, &read).with_context(|| format!("reading {}", path.display()))?;
     for f in &import.inspection.files {
         eprintln!(
             "{}: {} sweeps, {} rows excluded, {} warnings (`tyrerig inspect` lists them)",
