@@ -587,7 +587,10 @@ pub struct ModelMap {
 crate::ros_message!(ModelMap, "tyre_msgs", "ModelMap");
 
 /// `tyre_msgs/ModelState`: the live fit's model after the latest completed sweep.
-#[derive(Debug, Clone, PartialEq, Default, Serialize, Deserialize)]
+///
+/// `Deserialize` is written out so that a state recorded before `maps_extrapolated` existed
+/// still decodes (nothing is then marked extrapolated): older logs stay readable.
+#[derive(Debug, Clone, PartialEq, Default, Serialize)]
 pub struct ModelState {
     /// stamp = rig time of the end of the sweep that triggered the update
     pub header: Header,
@@ -621,6 +624,84 @@ pub struct ModelState {
     pub grid_speed_mps: f64,
     /// one map per channel
     pub maps: Vec<ModelMap>,
+    /// per map in `maps` order, one per grid point: outside the tested envelope (the value there
+    /// is extrapolated); empty in a state recorded before the flag existed
+    pub maps_extrapolated: Vec<bool>,
+}
+
+impl ModelState {
+    /// Whether grid point `i` of `maps[k]` is extrapolated (false when the state has no flags).
+    pub fn extrapolated(&self, k: usize, i: usize) -> bool {
+        let start: usize = self.maps.iter().take(k).map(|m| m.value.len()).sum();
+        self.maps_extrapolated.get(start + i).copied().unwrap_or(false)
+    }
+}
+
+impl<'de> Deserialize<'de> for ModelState {
+    fn deserialize<D: serde::Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
+        const FIELDS: [&str; 17] = [
+            "header",
+            "update_index",
+            "sweeps_used",
+            "segments_used",
+            "last_sweep",
+            "final_update",
+            "update_wall_s",
+            "error",
+            "stages",
+            "grid_fz_n",
+            "grid_slip_angle_deg",
+            "grid_slip_ratio",
+            "grid_camber_deg",
+            "grid_pressure_pa",
+            "grid_speed_mps",
+            "maps",
+            "maps_extrapolated",
+        ];
+        struct V;
+        impl<'de> serde::de::Visitor<'de> for V {
+            type Value = ModelState;
+            fn expecting(&self, f: &mut std::fmt::Formatter) -> std::fmt::Result {
+                f.write_str("tyre_msgs/ModelState")
+            }
+            fn visit_seq<A: serde::de::SeqAccess<'de>>(self, mut seq: A) -> Result<ModelState, A::Error> {
+                use serde::de::Error;
+                let mut n = 0;
+                macro_rules! field {
+                    () => {{
+                        n += 1;
+                        seq.next_element()?.ok_or_else(|| A::Error::invalid_length(n - 1, &self))?
+                    }};
+                }
+                let mut st = ModelState {
+                    header: field!(),
+                    update_index: field!(),
+                    sweeps_used: field!(),
+                    segments_used: field!(),
+                    last_sweep: field!(),
+                    final_update: field!(),
+                    update_wall_s: field!(),
+                    error: field!(),
+                    stages: field!(),
+                    grid_fz_n: field!(),
+                    grid_slip_angle_deg: field!(),
+                    grid_slip_ratio: field!(),
+                    grid_camber_deg: field!(),
+                    grid_pressure_pa: field!(),
+                    grid_speed_mps: field!(),
+                    maps: field!(),
+                    ..ModelState::default()
+                };
+                // Added later: a message that ends before it is an older one (CDR has no field
+                // markers, so "ended" shows as an error or as no element).
+                if let Ok(Some(flags)) = seq.next_element::<Vec<bool>>() {
+                    st.maps_extrapolated = flags;
+                }
+                Ok(st)
+            }
+        }
+        d.deserialize_struct("ModelState", &FIELDS, V)
+    }
 }
 
 crate::ros_message!(ModelState, "tyre_msgs", "ModelState");

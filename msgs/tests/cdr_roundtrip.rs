@@ -136,3 +136,61 @@ fn a_procedure_state_from_an_older_log_still_decodes() {
     let again: ProcedureState = from_cdr_with_header(&to_cdr_with_header(&new).unwrap()).unwrap();
     assert_eq!(again, new);
 }
+
+/// `ModelState` as it was before `maps_extrapolated`: what older live-fit logs hold.
+#[derive(serde::Serialize)]
+struct ModelStateV1 {
+    header: Header,
+    update_index: u32,
+    sweeps_used: u32,
+    segments_used: u32,
+    last_sweep: String,
+    final_update: bool,
+    update_wall_s: f64,
+    error: String,
+    stages: Vec<ModelStage>,
+    grid_fz_n: Vec<f64>,
+    grid_slip_angle_deg: Vec<f64>,
+    grid_slip_ratio: Vec<f64>,
+    grid_camber_deg: Vec<f64>,
+    grid_pressure_pa: Vec<f64>,
+    grid_speed_mps: f64,
+    maps: Vec<ModelMap>,
+}
+
+#[test]
+fn a_model_state_from_an_older_log_still_decodes_with_nothing_extrapolated() {
+    let now: ModelState = exemplar(3).unwrap();
+    assert!(!now.maps_extrapolated.is_empty());
+    let old = ModelStateV1 {
+        header: now.header.clone(),
+        update_index: now.update_index,
+        sweeps_used: now.sweeps_used,
+        segments_used: now.segments_used,
+        last_sweep: now.last_sweep.clone(),
+        final_update: now.final_update,
+        update_wall_s: now.update_wall_s,
+        error: now.error.clone(),
+        stages: now.stages.clone(),
+        grid_fz_n: now.grid_fz_n.clone(),
+        grid_slip_angle_deg: now.grid_slip_angle_deg.clone(),
+        grid_slip_ratio: now.grid_slip_ratio.clone(),
+        grid_camber_deg: now.grid_camber_deg.clone(),
+        grid_pressure_pa: now.grid_pressure_pa.clone(),
+        grid_speed_mps: now.grid_speed_mps,
+        maps: now.maps.clone(),
+    };
+    let bytes = to_cdr_with_header(&old).unwrap();
+    let back: ModelState = from_cdr_with_header(&bytes).unwrap();
+    assert_eq!(back, ModelState { maps_extrapolated: Vec::new(), ..now.clone() });
+    assert!(!back.extrapolated(0, 0));
+    // A cut message is still an error, not a default.
+    assert!(from_cdr_with_header::<ModelState>(&bytes[..bytes.len() - 12]).is_err());
+    // The flags of a state now survive, and index per map.
+    let n = now.maps[0].value.len();
+    assert!(now.maps.len() >= 2 && now.maps.iter().all(|m| m.value.len() == n));
+    let flagged = ModelState { maps_extrapolated: (0..now.maps.len() * n).map(|i| i == n).collect(), ..now };
+    let again: ModelState = from_cdr_with_header(&to_cdr_with_header(&flagged).unwrap()).unwrap();
+    assert_eq!(again, flagged);
+    assert!(again.extrapolated(1, 0) && !again.extrapolated(0, 0) && !again.extrapolated(1, 1));
+}

@@ -100,6 +100,8 @@ def test_the_fit_node_publishes_a_model_after_every_segment_and_writes_it_at_the
     maps = {m.channel: m for m in after.maps}
     assert set(maps) == {"FYW", "FX", "MZW"}, set(maps)
     assert all(len(m.value) == grid and len(m.std) == grid for m in maps.values()), grid
+    # Each map's grid points outside the tested envelope are flagged (read by the schema, not by us).
+    assert len(after.maps_extrapolated) == grid * len(after.maps), (len(after.maps_extrapolated), grid)
     assert any(math.isfinite(x) and x > 0 for x in maps["FYW"].std), "FYW has no finite uncertainty"
 
     # The model the node wrote at the end: an MF 6.1 property file and its fit report.

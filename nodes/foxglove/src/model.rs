@@ -58,6 +58,11 @@ pub struct Band {
     pub upper: Vec<f64>,
     /// 1σ of the prediction (NaN while a stage it depends on is not fitted).
     pub std: Vec<f64>,
+    /// True where the slice leaves the tested envelope: the curve there is extrapolated.
+    pub extrapolated: Vec<bool>,
+    /// The prediction where the data reached, NaN where it is extrapolated (drawn over `value`,
+    /// a Plot panel shows the measured part solid and breaks it where the model guesses).
+    pub value_tested: Vec<f64>,
 }
 
 impl ModelView {
@@ -73,7 +78,7 @@ impl ModelView {
             error: st.error.clone(),
             identified: format!("{identified} / {} stages identified", st.stages.len()),
             stages: st.stages.iter().map(stage_row).collect(),
-            bands: st.maps.iter().filter_map(|m| band(st, m)).collect(),
+            bands: st.maps.iter().enumerate().filter_map(|(k, m)| band(st, k, m)).collect(),
         }
     }
 }
@@ -104,7 +109,7 @@ fn nearest(axis: &[f64], target: f64) -> usize {
 
 /// The slice of `map` over slip at the nominal grid point; `None` when the map does not have the
 /// grid's size (a malformed message: the view is skipped, not the node).
-fn band(st: &ModelState, map: &ModelMap) -> Option<Band> {
+fn band(st: &ModelState, k: usize, map: &ModelMap) -> Option<Band> {
     let slip = match map.slip_axis.as_str() {
         "slip_ratio" => &st.grid_slip_ratio,
         _ => &st.grid_slip_angle_deg,
@@ -121,6 +126,9 @@ fn band(st: &ModelState, map: &ModelMap) -> Option<Band> {
     let at = |is: usize| ((il * ns + is) * nc + ic) * np + ip;
     let value: Vec<f64> = (0..ns).map(|is| map.value[at(is)]).collect();
     let std: Vec<f64> = (0..ns).map(|is| map.std[at(is)]).collect();
+    // A state from before the flag existed has none: nothing is marked extrapolated.
+    let extrapolated: Vec<bool> = (0..ns).map(|is| st.extrapolated(k, at(is))).collect();
+    let value_tested = value.iter().zip(&extrapolated).map(|(v, x)| if *x { f64::NAN } else { *v }).collect();
     Some(Band {
         channel: map.channel.clone(),
         slip_axis: map.slip_axis.clone(),
@@ -132,6 +140,8 @@ fn band(st: &ModelState, map: &ModelMap) -> Option<Band> {
         upper: value.iter().zip(&std).map(|(v, s)| v + 1.96 * s).collect(),
         value,
         std,
+        extrapolated,
+        value_tested,
     })
 }
 
@@ -146,7 +156,9 @@ pub(crate) const MODEL_SCHEMA: &str = r#"{"type":"object","properties":{
 "slip_axis":{"type":"string"},"fz_n":{"type":"number"},"camber_deg":{"type":"number"},
 "pressure_pa":{"type":"number"},"slip":{"type":"array","items":{"type":"number"}},
 "value":{"type":"array","items":{"type":"number"}},"lower":{"type":"array","items":{"type":"number"}},
-"upper":{"type":"array","items":{"type":"number"}},"std":{"type":"array","items":{"type":"number"}}}}}}}"#;
+"upper":{"type":"array","items":{"type":"number"}},"std":{"type":"array","items":{"type":"number"}},
+"extrapolated":{"type":"array","items":{"type":"boolean"}},
+"value_tested":{"type":"array","items":{"type":"number"}}}}}}}"#;
 
 #[cfg(test)]
 mod tests {
@@ -157,6 +169,7 @@ mod tests {
         let (loads, slips, cambers, pressures) =
             (vec![2000.0, 4000.0, 6000.0], vec![-5.0, 0.0, 5.0], vec![-2.0, 0.0, 2.0], vec![1.8e5, 2.0e5, 2.2e5]);
         let n = loads.len() * slips.len() * cambers.len() * pressures.len();
+        let (slips_n, cambers_n, pressures_n) = (slips.len(), cambers.len(), pressures.len());
         // value = the flat index, std = 1: the slice picks indices the test can recompute.
         let map = ModelMap {
             channel: "FYW".into(),
@@ -165,6 +178,8 @@ mod tests {
             value: (0..n).map(|i| i as f64).collect(),
             std: vec![1.0; n],
         };
+        // The largest slip angle lies outside the tested envelope.
+        let maps_extrapolated = (0..n).map(|i| (i / (cambers_n * pressures_n)) % slips_n == slips_n - 1).collect();
         let stage = |name: &str, status: u8, coefficients: Vec<ModelCoefficient>| ModelStage {
             status,
             stage: name.into(),
@@ -192,6 +207,7 @@ mod tests {
             grid_camber_deg: cambers,
             grid_pressure_pa: pressures,
             maps: vec![map],
+            maps_extrapolated,
             ..ModelState::default()
         }
     }
@@ -218,6 +234,19 @@ mod tests {
         assert_eq!(b.lower[0], expect[0] - 1.96);
         assert_eq!(b.upper[2], expect[2] + 1.96);
         assert_eq!(b.slip, vec![-5.0, 0.0, 5.0]);
+        // The largest slip angle is extrapolated: flagged, and left out of the tested curve.
+        assert_eq!(b.extrapolated, vec![false, false, true]);
+        assert_eq!(&b.value_tested[..2], &expect[..2]);
+        assert!(b.value_tested[2].is_nan());
+    }
+
+    #[test]
+    fn a_map_without_the_extrapolated_flag_marks_nothing_extrapolated() {
+        let mut st = state();
+        st.maps_extrapolated.clear();
+        let b = &ModelView::of(&st).bands[0];
+        assert_eq!(b.extrapolated, vec![false; 3]);
+        assert_eq!(b.value_tested, b.value);
     }
 
     #[test]

@@ -94,5 +94,6 @@ pub fn model_state(result: Option<&FitResult>, grid: Option<&EnvelopeGrid>, maps
             std: m.std.clone(),
         })
         .collect();
+    st.maps_extrapolated = maps.iter().flat_map(|m| m.extrapolated.iter().copied()).collect();
     st
 }

@@ -74,6 +74,11 @@ fn live_fit_on_a_freerolling_run_matches_the_offline_fit_and_its_bands_hold() {
     assert!(map("FYW").std.iter().all(|s| s.is_finite() && *s >= 0.0));
     assert!(map("MZW").std.iter().all(|s| s.is_finite()));
     assert!(map("FX").std.iter().all(|s| s.is_nan()));
+    // Each map says where it is extrapolated: the run holds one pressure of the grid's three.
+    let k_fy = last.maps.iter().position(|m| m.channel == "FYW").unwrap();
+    let fy_extrapolated = (0..660).filter(|&i| last.extrapolated(k_fy, i)).count();
+    assert_eq!(last.maps_extrapolated.len(), 660 * last.maps.len());
+    assert!(fy_extrapolated > 0 && fy_extrapolated < 660, "{fy_extrapolated} of 660 extrapolated");
 
     // The same log replayed into a fresh core gives the same model states (the log reproduces it).
     let mut core = livefit::LiveFit::new(LiveFitConfig { fz0_n: Some(h.plan().fz0_n), ..LiveFitConfig::default() });
