@@ -407,7 +407,12 @@ fn tabulate(spec: &FixtureSpec, rows: &[(f64, State)]) -> ChannelTable {
         let gx = (1.0 / (1.0 + (4.0 * alpha).powi(2))).sqrt();
         let gy = (1.0 / (1.0 + (6.0 * kappa).powi(2))).sqrt();
         let (fx, fy) = (fx0 * gx, fy0 * gy);
-        let mz = -0.02 * fy * (1.0 - (alpha.abs() / 0.2).min(1.0)) + 0.01 * fx * alpha.signum() * 0.1;
+        // Aligning moment as a tyre makes it: the pneumatic trail shrinks with the combined
+        // (equivalent) slip, the slip ratio scaled by the stiffness ratio, so driving or braking
+        // takes the trail away as sliding spreads through the contact patch; and FX acts on an
+        // arm that grows with the lateral deflection (FY/FZ).
+        let alpha_eq = (alpha.powi(2) + (bx * 1.6 / (by * 1.4) * kappa).powi(2)).sqrt();
+        let mz = -0.02 * fy * (1.0 - (alpha_eq / 0.2).min(1.0)) + 0.004 * fy / fz.abs().max(1.0) * fx;
         let mx = -0.005 * fy + 0.02 * fz * gamma;
         let rl = 0.258 - fz / 150_000.0;
         let re = 0.255 - fz / 300_000.0;
