@@ -8,7 +8,7 @@
 use mffit::Cell;
 
 use crate::interpret::Signals;
-use crate::sweeps::{Conditioning, Exclusion, FoundSweep, Swept};
+use crate::sweeps::{Conditioning, Exclusion, FoundSweep, Swept, median_of};
 
 /// Two sweeps were run at the same cell (within what a rig holds between repeats).
 pub fn same_cell(a: &Cell, b: &Cell) -> bool {
@@ -130,13 +130,7 @@ pub fn start_tread_temps(sig: &Signals, sweeps: &[FoundSweep]) -> Vec<f64> {
         .iter()
         .map(|s| {
             let rows = (s.last + 1 - s.first).div_ceil(20).max(5);
-            let mut t: Vec<f64> =
-                (s.first..=s.last.min(s.first + rows - 1)).map(tread).filter(|x| x.is_finite()).collect();
-            if t.is_empty() {
-                return f64::NAN;
-            }
-            t.sort_by(f64::total_cmp);
-            t[t.len() / 2]
+            median_of((s.first..=s.last.min(s.first + rows - 1)).map(tread))
         })
         .collect()
 }
@@ -150,12 +144,10 @@ pub fn mark_cold_start(sweeps: &mut [FoundSweep]) {
     let start_c: Vec<f64> = sweeps.iter().map(|s| s.tread_start_c).collect();
     let order: Vec<usize> =
         (0..sweeps.len()).filter(|&i| sweeps[i].conditioning.is_none() && start_c[i].is_finite()).collect();
-    let mut typical: Vec<f64> = order.iter().map(|&i| start_c[i]).collect();
-    if typical.len() < 3 {
+    if order.len() < 3 {
         return;
     }
-    typical.sort_by(f64::total_cmp);
-    let run_c = typical[typical.len() / 2];
+    let run_c = median_of(order.iter().map(|&i| start_c[i]));
     let rise = |w: &[usize]| start_c[w[1]] - start_c[w[0]];
     let cold =
         order.windows(2).take_while(|w| rise(w) > SETTLED_RISE_K && start_c[w[0]] < run_c - COLD_BELOW_RUN_K).count();
