@@ -71,6 +71,8 @@ pub struct Column {
     pub phi: Vec<f64>,
     /// Precision (1/sd²) of the coefficient's zero-mean prior.
     pub prior_precision: f64,
+    /// The sign the coefficient must keep ([`state::sign_bound`]).
+    pub sign: Option<state::Sign>,
 }
 
 /// The state effects being fitted together: their choices and terms as design columns.
@@ -110,7 +112,13 @@ impl Design {
                 };
                 let phi_max = range.iter().fold(0.0f64, |m, v| m.max(v.abs())).max(1e-9);
                 let sd = if t.factor == state::Factor::Radius { PRIOR_RADIUS_MM } else { PRIOR_LOG_FACTOR } / phi_max;
-                cols.push(Column { slot, term: t, phi, prior_precision: 1.0 / (sd * sd) });
+                cols.push(Column {
+                    slot,
+                    term: t,
+                    phi,
+                    prior_precision: 1.0 / (sd * sd),
+                    sign: state::sign_bound(e.effect, t),
+                });
             }
         }
         Self { effects, cols }
@@ -209,6 +217,53 @@ fn solve(n: &Normal) -> DVector<f64> {
         a[(i, i)] += 1e-9 * scale + if a[(i, i)] <= 1e-12 * scale { scale } else { 0.0 };
     }
     a.cholesky().map_or_else(|| DVector::zeros(m), |c| c.solve(&n.b))
+}
+
+/// Solves the normal equations of `design` with its columns' sign bounds: a column whose
+/// coefficient (present value plus step) would take the wrong sign is held at zero and the
+/// rest solved again, one column at a time, most violated first (an active set that only
+/// grows: the bounded columns are few and rarely more than one is active).
+fn solve_bounded(design: &Design, n: &Normal) -> DVector<f64> {
+    let m = n.b.len();
+    let present: Vec<f64> = design
+        .cols
+        .iter()
+        .map(|c| {
+            let e = &design.effects[c.slot];
+            e.get(&state::term_key(e.effect, c.term))
+        })
+        .collect();
+    let mut held: Vec<usize> = Vec::new();
+    loop {
+        let free: Vec<usize> = (0..m).filter(|i| !held.contains(i)).collect();
+        let mut delta = DVector::<f64>::zeros(m);
+        for &i in &held {
+            delta[i] = -present[i];
+        }
+        let reduced = Normal {
+            a: DMatrix::from_fn(free.len(), free.len(), |r, c| n.a[(free[r], free[c])]),
+            b: DVector::from_fn(free.len(), |r, _| {
+                n.b[free[r]] - held.iter().map(|&i| n.a[(free[r], i)] * delta[i]).sum::<f64>()
+            }),
+        };
+        if !free.is_empty() {
+            for (r, d) in free.iter().zip(solve(&reduced).iter()) {
+                delta[*r] = *d;
+            }
+        }
+        let worst = free
+            .iter()
+            .filter_map(|&i| {
+                let sign = design.cols.get(i)?.sign?;
+                let c = present[i] + delta[i];
+                (!sign.holds(c)).then_some((i, c.abs()))
+            })
+            .max_by(|a, b| a.1.total_cmp(&b.1));
+        match worst {
+            Some((i, _)) => held.push(i),
+            None => return delta,
+        }
+    }
 }
 
 /// Columns of the effect in `slot` the data determine (for the parameter count of the
@@ -350,7 +405,7 @@ pub fn fit_all(
     let mut lin = lin0.clone();
     let mut chi = chi2_of(&lin);
     for _ in 0..=GN_STEPS {
-        let mut delta = solve(&normal(&design, &lin, &all, target, sigma));
+        let mut delta = solve_bounded(&design, &normal(&design, &lin, &all, target, sigma));
         // A step the model's own evaluation does not confirm is halved (the linearisation
         // overshoots where a factor changes the curve's shape strongly), at most four times.
         for _ in 0..4 {
@@ -397,7 +452,7 @@ pub fn cross_validate(
         let delta = if m == 0 {
             DVector::zeros(0)
         } else {
-            solve(&normal(design, lin, &train, &|k| target_of_fold(fi, k), sigma))
+            solve_bounded(design, &normal(design, lin, &train, &|k| target_of_fold(fi, k), sigma))
         };
         let model: Vec<EffectParams> = fixed.iter().cloned().chain(design.updated(&delta)).collect();
         for (&k, p) in test.iter().zip(ev.predict(&model, test)) {
@@ -441,7 +496,7 @@ pub fn chi2_after_solve(
 ) -> f64 {
     let all: Vec<usize> = (0..ev.ds.len()).collect();
     let n = normal(design, lin, &all, target, sigma);
-    let d = solve(&n);
+    let d = solve_bounded(design, &n);
     // χ²(Δ) = χ²(0) − 2bᵀΔ + ΔᵀAΔ; only the part that depends on Δ is needed to compare.
     -2.0 * n.b.dot(&d) + (d.transpose() * &n.a * &d)[(0, 0)]
 }

@@ -346,6 +346,38 @@ pub fn prefix(effect: Effect) -> &'static str {
     }
 }
 
+/// The sign physics fixes for a term's coefficient.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Sign {
+    /// Never below zero.
+    NonNegative,
+    /// Never above zero.
+    NonPositive,
+}
+
+impl Sign {
+    /// Whether `c` keeps the sign.
+    pub fn holds(self, c: f64) -> bool {
+        match self {
+            Sign::NonNegative => c >= 0.0,
+            Sign::NonPositive => c <= 0.0,
+        }
+    }
+}
+
+/// The sign a term's coefficient must keep, where physics fixes one: a hotter tyre's loaded
+/// radius only grows (the inflation pressure and the rubber expand with heat) and a worn one's
+/// only shrinks (tread is lost, never gained). Unbounded, thermal's radius slope stood in for
+/// tread loss: on a Square Matrix run, which heats the tyre as it wears, it came out shrinking
+/// the radius by 0.165 mm per 10 K and thermal was named for wear (docs/doctor-benchmark.md).
+pub fn sign_bound(effect: Effect, t: Term) -> Option<Sign> {
+    match (effect, t.factor, t.basis) {
+        (Effect::Thermal, Factor::Radius, 1) => Some(Sign::NonNegative),
+        (Effect::Wear, Factor::Radius, 0) => Some(Sign::NonPositive),
+        _ => None,
+    }
+}
+
 /// The extension key of a term: `THERMAL_MUY_2` (x² on λμy), `WEAR_RL_MM`, `SPECIMEN_KY_T1`.
 pub fn term_key(effect: Effect, t: Term) -> String {
     match effect {
