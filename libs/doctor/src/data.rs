@@ -237,7 +237,8 @@ impl Dataset {
         };
         let stride = ((1.0 / opt.point_rate_hz) / dt_pub.max(1e-4)).round().max(1.0) as usize;
         let mut since_point = 0usize;
-        let mut tyre_change_pending = true;
+        let mut tyre_change_pending = false;
+        let mut outside_change_seen = false;
         for smp in &log.samples {
             let t = smp.runtime_s;
             if !t.is_finite() || t <= last_t {
@@ -248,9 +249,12 @@ impl Dataset {
                 cur = Some(&log.states[st_i]);
                 st_i += 1;
             }
-            if let Some(st) = cur
-                && st.phase == ProcedureState::PHASE_TYRE_CHANGE
-            {
+            // A tyre is mounted where a tyre change ends: the samples of the change itself (the
+            // rig parked) are the old tyre's, and the change a log opens with mounts its first
+            // tyre. Marking every sample of a change as a new tyre counted a 900 s change as
+            // ninety thousand tyres, and no specimen term could be fitted.
+            let in_change = cur.is_some_and(|st| st.phase == ProcedureState::PHASE_TYRE_CHANGE);
+            if in_change && outside_change_seen {
                 tyre_change_pending = true;
             }
             let in_sweep = cur.is_some_and(|st| st.phase == ProcedureState::PHASE_SWEEP);
@@ -283,9 +287,12 @@ impl Dataset {
             let idx = s.t_s.len();
             s.t_s.push(t + *t_offset);
             s.sweep.push(sweep);
-            s.new_tyre.push(first || tyre_change_pending);
+            s.new_tyre.push(first || (tyre_change_pending && !in_change));
             first = false;
-            tyre_change_pending = false;
+            if !in_change {
+                tyre_change_pending = false;
+                outside_change_seen = true;
+            }
             s.alpha_deg.push(smp.slipangl_deg);
             s.kappa.push(smp.longslip);
             s.fz_n.push(smp.fzw_n);
@@ -515,4 +522,53 @@ fn central_rate(t: &[f64], y: &[f64], half_window_s: f64) -> Vec<f64> {
         out[i] = if dt > 1e-6 { (y[hi] - y[lo]) / dt } else { 0.0 };
     }
     out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn state_at(t_s: f64, phase: u8, sweep_index: u32) -> ProcedureState {
+        ProcedureState {
+            header: tyre_msgs::std_msgs::Header::iso_w(t_s),
+            phase,
+            sweep_index,
+            sweep_name: format!("sweep{sweep_index}"),
+            ..Default::default()
+        }
+    }
+
+    /// A log that opens with the first mounting and changes the tyre once: two tyres, the
+    /// second mounted where its change ends, and the sliding energy counted per tyre.
+    #[test]
+    fn a_tyre_change_mounts_one_new_tyre_where_it_ends() {
+        let samples: Vec<RigSample> = (0..60)
+            .map(|k| RigSample {
+                seq: k,
+                runtime_s: k as f64 * 0.1,
+                trajvelw_mps: 10.0,
+                fzw_n: 4000.0,
+                fyw_n: 1000.0,
+                slipangl_deg: 3.0,
+                inflpres_pa: 2.4e5,
+                ..Default::default()
+            })
+            .collect();
+        let states = vec![
+            state_at(0.0, ProcedureState::PHASE_TYRE_CHANGE, 0),
+            state_at(1.0, ProcedureState::PHASE_SWEEP, 1),
+            state_at(3.0, ProcedureState::PHASE_TYRE_CHANGE, 2),
+            state_at(4.0, ProcedureState::PHASE_SWEEP, 3),
+        ];
+        let log = RawLog { source: "two_tyres.mcap".into(), samples, states };
+        let ds = Dataset::from_logs(&[log], &DataOptions { input_smoothing_s: 0.0, ..DataOptions::default() })
+            .expect("dataset");
+        let s = &ds.series;
+        let mounted: Vec<usize> = (0..s.len()).filter(|&i| s.new_tyre[i]).collect();
+        assert_eq!(mounted, vec![0, 40], "new tyre at the log's start and where the change ends");
+        assert_eq!(s.tyre.iter().max(), Some(&1), "two tyres");
+        assert_eq!(s.tyre[39], 0, "the change's own samples are the old tyre's");
+        assert_eq!(s.sliding_energy_j[40], 0.0, "the new tyre has slid nothing");
+        assert!(s.sliding_energy_j[39] > 0.0);
+    }
 }

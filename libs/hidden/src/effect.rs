@@ -9,7 +9,7 @@
 //!
 //! Parameters that only mean something against a log (a temperature optimum, a wear rate, a
 //! power threshold) are drawn *relative* to the logs injected together — a quantile of their
-//! temperatures, a depth at the end of the most-sliding log — and resolved to absolute values
+//! temperatures, a depth lost by the most-sliding tyre — and resolved to absolute values
 //! by [`crate::resolve`]; the report gives both.
 
 use rand::{RngExt, SeedableRng};
@@ -106,7 +106,7 @@ pub struct ThermalEffect {
 pub struct WearEffect {
     /// Multiplies the tread depth lost (0 = no effect).
     pub strength: f64,
-    /// Tread lost by the end of the most-sliding log at strength 1 [mm]; sets the rate.
+    /// Tread lost by the most-sliding tyre of the logs at strength 1 [mm]; sets the rate.
     pub depth_at_end_mm: f64,
     /// Grip change per mm^exponent of tread lost (either sign) [-].
     pub grip_per_mm: f64,
@@ -147,7 +147,7 @@ pub struct BreakInEffect {
     pub recovery: Recovery,
     /// Sliding power threshold of "severe": a quantile of the logs' in-sweep sliding power [-].
     pub threshold_quantile: f64,
-    /// E0 as a share of the severe energy of the most-sliding log [-].
+    /// E0 as a share of the severe energy of the most-sliding tyre [-].
     pub energy_scale_share: f64,
     /// Grip deficit of the new tyre [-].
     pub grip_deficit: f64,

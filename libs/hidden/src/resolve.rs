@@ -4,7 +4,8 @@
 //! The logs injected together are one tyre compound: a temperature optimum is a quantile of
 //! their pooled grip temperatures, the wear rate is set by the most-sliding of them, and so on,
 //! so a cornering and a drive/brake run get the same μ(T) law. The states themselves (wear,
-//! break-in energy) start again in each log, as each is a fresh specimen.
+//! break-in energy) start again in each log, as each is a fresh specimen, and at every tyre
+//! change within a log (a Square Matrix run changes its tyre ten times).
 
 use std::collections::BTreeMap;
 
@@ -139,7 +140,7 @@ fn resolve_thermal(t: &ThermalEffect, logs: &[LogSeries]) -> BTreeMap<String, f6
 }
 
 fn resolve_wear(w: &WearEffect, logs: &[LogSeries]) -> BTreeMap<String, f64> {
-    let e_max_j = logs.iter().filter_map(|l| l.energy_j(0.0).last().copied()).fold(0.0, f64::max);
+    let e_max_j = logs.iter().map(|l| l.largest_tyre_energy_j(0.0)).fold(0.0, f64::max);
     let rate = if e_max_j > 0.0 { w.strength * w.depth_at_end_mm / (e_max_j * 1e-6) } else { 0.0 };
     BTreeMap::from([("rate_mm_per_mj".into(), rate), ("largest_log_energy_j".into(), e_max_j)])
 }
@@ -149,7 +150,7 @@ fn resolve_break_in(b: &BreakInEffect, logs: &[LogSeries]) -> BTreeMap<String, f
     powers.retain(|p| *p > 0.0);
     powers.sort_by(f64::total_cmp);
     let threshold_w = if powers.is_empty() { 0.0 } else { quantile(&powers, b.threshold_quantile) };
-    let e_max_j = logs.iter().filter_map(|l| l.energy_j(threshold_w).last().copied()).fold(0.0, f64::max);
+    let e_max_j = logs.iter().map(|l| l.largest_tyre_energy_j(threshold_w)).fold(0.0, f64::max);
     // A log with no severe sliding keeps the whole deficit (E/E0 = 0 everywhere).
     let energy_scale_j = (b.energy_scale_share * e_max_j).max(1.0);
     BTreeMap::from([

@@ -39,6 +39,10 @@ pub struct LogSeries {
     pub radius_ok: Vec<bool>,
     /// Inside a sweep (`PHASE_SWEEP` of the procedure state).
     pub in_sweep: Vec<bool>,
+    /// A fresh tyre is on the rig from this sample: the log's first, and the first after each
+    /// later tyre change (`PHASE_TYRE_CHANGE`; the change a log opens with mounts its first
+    /// tyre). Wear and break-in start again on it, as the rig's own tyre does.
+    pub new_tyre: Vec<bool>,
     /// Mean of the finite TRDTEMPI/C/O [°C] (NaN when FAULT_TEMPERATURE or none is finite).
     pub temp_c: Vec<f64>,
     /// Sliding power √((FX·κ·V)² + (FYW·V·sin α)²) from the measured samples [W] (0 when not rolling).
@@ -96,16 +100,30 @@ impl LogSeries {
         Ok(build(topic, &samples, &states))
     }
 
-    /// Sliding energy since the start of the log above `threshold_w` of sliding power,
-    /// ∫max(P − threshold, 0) dt [J], per sample.
+    /// Sliding energy on the tyre above `threshold_w` of sliding power, ∫max(P − threshold,
+    /// 0) dt [J] since the tyre was mounted, per sample.
     pub fn energy_j(&self, threshold_w: f64) -> Vec<f64> {
         let mut e = 0.0;
         let mut out = Vec::with_capacity(self.len());
         for k in 0..self.len() {
-            e += (self.sliding_power_w[k] - threshold_w).max(0.0) * self.step_s(k);
+            if self.mounted_at(k) {
+                e = 0.0;
+            } else {
+                e += (self.sliding_power_w[k] - threshold_w).max(0.0) * self.step_s(k);
+            }
             out.push(e);
         }
         out
+    }
+
+    /// Largest sliding energy any tyre of the log reached above `threshold_w` [J].
+    pub fn largest_tyre_energy_j(&self, threshold_w: f64) -> f64 {
+        self.energy_j(threshold_w).into_iter().fold(0.0, f64::max)
+    }
+
+    /// A fresh tyre from sample `k` (a series built without tyre changes has one, from 0).
+    fn mounted_at(&self, k: usize) -> bool {
+        self.new_tyre.get(k).copied().unwrap_or(k == 0)
     }
 
     /// The grip temperature: `surface_weight` × the measured mean tread temperature +
@@ -119,6 +137,11 @@ impl LogSeries {
         let mut out = Vec::with_capacity(self.len());
         for k in 0..self.len() {
             let t = self.temp_c[k];
+            if self.mounted_at(k) {
+                // A fresh tyre's bulk is at its surface's temperature.
+                lagged = f64::NAN;
+                last = f64::NAN;
+            }
             pending_s += self.step_s(k);
             if t.is_finite() {
                 last = t;
@@ -177,6 +200,8 @@ fn build(topic: String, samples: &[(u64, RigSample)], states: &[ProcedureState])
     let mut s = LogSeries { topic, ..LogSeries::default() };
     let mut st_i = 0;
     let mut phase: Option<u8> = None;
+    // As the doctor reads a log: a tyre change mounts its tyre where it ends.
+    let (mut change_pending, mut outside_change_seen) = (false, false);
     for (log_time, m) in samples {
         // The sweep phase in force at this sample, as the doctor reads it.
         while st_i < states.len() && stamp_s(&states[st_i]) <= m.runtime_s + 1e-9 {
@@ -226,6 +251,13 @@ fn build(topic: String, samples: &[(u64, RigSample)], states: &[ProcedureState])
         s.forces_ok.push(forces_ok);
         s.radius_ok.push(radius_ok);
         s.in_sweep.push(phase == Some(ProcedureState::PHASE_SWEEP));
+        let in_change = phase == Some(ProcedureState::PHASE_TYRE_CHANGE);
+        change_pending |= in_change && outside_change_seen;
+        s.new_tyre.push(s.new_tyre.is_empty() || (change_pending && !in_change));
+        if !in_change {
+            change_pending = false;
+            outside_change_seen = true;
+        }
         s.temp_c.push(temp_c);
         s.sliding_power_w.push(power);
     }
@@ -247,6 +279,39 @@ mod tests {
         assert!((e[3] - (10.0 + 30.0)).abs() < 1e-9, "{e:?}");
         let e = s.energy_j(2000.0);
         assert!((e[3] - 10.0).abs() < 1e-9, "{e:?}");
+    }
+
+    /// A fresh tyre has slid nothing: the energy starts again where a tyre is mounted.
+    #[test]
+    fn energy_starts_again_on_a_new_tyre() {
+        let mut s = series(&[0.0, 0.01, 0.02, 0.03, 0.04], &[0.0; 5], &[1000.0; 5]);
+        s.new_tyre = vec![true, false, false, true, false];
+        let e = s.energy_j(0.0);
+        assert!((e[2] - 20.0).abs() < 1e-9 && e[3] == 0.0 && (e[4] - 10.0).abs() < 1e-9, "{e:?}");
+        assert!((s.largest_tyre_energy_j(0.0) - 20.0).abs() < 1e-9);
+    }
+
+    /// The generator reads tyre changes as the doctor does: the change a log opens with mounts
+    /// its first tyre, a later one mounts the next where it ends.
+    #[test]
+    fn a_tyre_change_mounts_a_new_tyre_where_it_ends() {
+        let samples: Vec<(u64, RigSample)> = (0..60)
+            .map(|k| (k, RigSample { seq: k, runtime_s: k as f64 * 0.1, trajvelw_mps: 10.0, ..Default::default() }))
+            .collect();
+        let state = |t_s: f64, phase: u8| ProcedureState {
+            header: tyre_msgs::std_msgs::Header::iso_w(t_s),
+            phase,
+            ..Default::default()
+        };
+        let states = [
+            state(0.0, ProcedureState::PHASE_TYRE_CHANGE),
+            state(1.0, ProcedureState::PHASE_SWEEP),
+            state(3.0, ProcedureState::PHASE_TYRE_CHANGE),
+            state(4.0, ProcedureState::PHASE_SWEEP),
+        ];
+        let s = build("/rig/sample".into(), &samples, &states);
+        let mounted: Vec<usize> = (0..s.len()).filter(|&k| s.new_tyre[k]).collect();
+        assert_eq!(mounted, vec![0, 40]);
     }
 
     #[test]
