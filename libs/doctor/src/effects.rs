@@ -874,18 +874,17 @@ mod tests {
         close(&recover_state(Effect::Thermal, choice, &truth), &want, 0.05);
     }
 
-    /// A hotter tyre's radius only grows: thermal's radius slope is fitted where it does, and
-    /// held at zero where the data would have it shrink with heat (tread loss, wear's sign),
-    /// while its grip term is still fitted.
+    /// A worn tyre's radius only shrinks: wear's radius term is fitted where it does, and held
+    /// at zero where the data would have it grow with sliding energy, while its grip term is
+    /// still fitted.
     #[test]
-    fn thermal_radius_grows_with_heat_or_is_held_at_zero() {
-        let choice = state::Choice { lag_s: 30.0, t_ref_c: 40.0, ..state::Choice::default() };
-        let grows = [(t(Factor::MuY, 1), -0.05), (t(Factor::Radius, 1), 0.4)];
-        close(&recover_state(Effect::Thermal, choice, &grows), &[-0.05, 0.4], 0.05);
-        let shrinks = [(t(Factor::MuY, 1), -0.05), (t(Factor::Radius, 1), -0.4)];
-        let got = recover_state(Effect::Thermal, choice, &shrinks);
+    fn wear_radius_shrinks_with_sliding_or_is_held_at_zero() {
+        let shrinks = [(t(Factor::MuY, 0), -0.08), (t(Factor::Radius, 0), -2.5)];
+        close(&recover_state(Effect::Wear, state::Choice::default(), &shrinks), &[-0.08, -2.5], 0.05);
+        let grows = [(t(Factor::MuY, 0), -0.08), (t(Factor::Radius, 0), 2.5)];
+        let got = recover_state(Effect::Wear, state::Choice::default(), &grows);
         assert_eq!(got[1], 0.0, "radius slope {got:?}");
-        assert!((got[0] + 0.05).abs() < 0.01, "grip slope {got:?}");
+        assert!((got[0] + 0.08).abs() < 0.01, "grip slope {got:?}");
     }
 
     #[test]
