@@ -50,6 +50,7 @@ import signal
 import struct
 import subprocess
 import sys
+import threading
 import time
 from datetime import datetime
 from pathlib import Path
@@ -178,6 +179,42 @@ class Link:
     def close(self) -> None:
         self.a.close()
         self.b.close()
+
+
+class UdpOverflowWatch:
+    """Host B's kernel count of UDP datagrams dropped because a socket's receive buffer was full
+    (`RcvbufErrors` in its namespace's /proc/net/snmp), read every 0.25 s while the suite runs:
+    what B's own processes did not read in time, as against what the link lost."""
+
+    def __init__(self, host: Host):
+        self.path = Path(f"/proc/{host.pid}/net/snmp")
+        self.readings: list[tuple[float, int]] = []
+        self._stop = threading.Event()
+        self._thread = threading.Thread(target=self._run, daemon=True)
+        self._thread.start()
+
+    def read(self) -> int:
+        head, values = [line.split()[1:] for line in self.path.read_text().splitlines() if line.startswith("Udp:")][:2]
+        return int(dict(zip(head, values))["RcvbufErrors"])
+
+    def _run(self) -> None:
+        while not self._stop.is_set():
+            self.readings.append((time.time(), self.read()))
+            self._stop.wait(0.25)
+
+    def stop(self) -> None:
+        self._stop.set()
+        self._thread.join()
+        self.readings.append((time.time(), self.read()))
+
+    def rose_between(self, start: float, end: float) -> int:
+        """Datagrams B's sockets dropped from `start` to `end` (the readings either side)."""
+        before = [n for w, n in self.readings if w <= start] or [self.readings[0][1]]
+        after = [n for w, n in self.readings if w >= end] or [self.readings[-1][1]]
+        return after[0] - before[-1]
+
+    def total(self) -> int:
+        return self.readings[-1][1] - self.readings[0][1]
 
 
 @pytest.fixture
@@ -462,6 +499,7 @@ def test_freerolling_over_two_hosts_with_link_faults(tyrerig, domain_id, link, t
     t_test = time.monotonic()
     have_nft = shutil.which("nft") is not None
     launch = launch_file(tmp_path, domain_id, rig=f"time_scale = {TIME_SCALE}", sequencer="exit_when_done = true")
+    overflow = UdpOverflowWatch(link.b)
     suite = Suite(tyrerig, link, launch, tmp_path)
     faults: dict[str, tuple[float, float]] = {}  # name -> (wall start, wall end)
     dropped: dict[str, int] = {}
@@ -500,6 +538,7 @@ def test_freerolling_over_two_hosts_with_link_faults(tyrerig, domain_id, link, t
             suite.stop()
         finally:
             suite.kill_all()
+            overflow.stop()
     wall = time.monotonic() - t_test
     assert dropped.get("A", 1) > 0 and dropped.get("B", 1) > 0, f"the loss rules dropped nothing: {dropped}"
 
@@ -550,8 +589,22 @@ def test_freerolling_over_two_hosts_with_link_faults(tyrerig, domain_id, link, t
     def fault_of(t: float) -> str | None:
         return next((n for n, (a, _) in faults.items() if a - 0.1 <= t <= aftermath_end(n)), None)
 
-    assert not [g for g in gaps if fault_of(published(g[0])) is None], \
-        f"B lost samples while the link was healthy: {[g for g in gaps if fault_of(published(g[0])) is None][:5]}"
+    # Unless B itself could not keep up: on a loaded 2-core machine B, catching up after the 6 s
+    # outage (resent samples on top of live ones, for each of its three readers), can fall behind
+    # for good, and its sockets' receive buffers overflow (CI once, and here with three CPU hogs
+    # beside the test: from fault (c) on, B's delay grew to 3-18 s and its kernel dropped 530,000
+    # datagrams). Such a gap is B's own loss, not the link's: B's kernel counted datagrams dropped
+    # at its full sockets between the first missing sample's publication and the recorder naming
+    # the gap. A gap on a healthy link without that is a lost sample nobody can account for.
+    missing = {int(m[1]): w for w, line in log_lines(suite.log("recorder"), r"recorder: \d+ sample\(s\) missing")
+               if (m := re.search(r"missing on /rig/sample: seq (\d+)", line))}
+    healthy_gaps = [g for g in gaps if fault_of(published(g[0])) is None]
+    for a, _ in healthy_gaps:
+        assert a in missing, f"the recorder's log does not name the gap from seq {a}"
+    unexplained = [(a, b) for a, b in healthy_gaps if overflow.rose_between(published(a) - 0.5, missing[a] + 0.5) == 0]
+    assert not unexplained, \
+        f"B lost samples while the link was healthy and its sockets dropped nothing: {unexplained[:5]}"
+    lost_overloaded = sum(b - a + 1 for a, b in healthy_gaps)
     lost_in = {n: sum(b - a + 1 for a, b in gaps if fault_of(published(a)) == n) for n in faults}
 
     # B noted each outage: the recorder's stream watch, at the latest when traffic came back.
@@ -567,8 +620,6 @@ def test_freerolling_over_two_hosts_with_link_faults(tyrerig, domain_id, link, t
     detect_b = {"a": noted("a", 1.5), "c": noted("c", 4.0)}
     # How soon B reported a loss: the recorder's 'missing' line for the first gap of each fault,
     # after the first missing sample was published (the gap shows with the next sample).
-    missing = {int(m[1]): w for w, line in log_lines(suite.log("recorder"), r"recorder: \d+ sample\(s\) missing")
-               if (m := re.search(r"missing on /rig/sample: seq (\d+)", line))}
     reported = {}
     for name in faults:
         first = next((a for a, _ in gaps if fault_of(published(a)) == name), None)
@@ -669,7 +720,9 @@ def test_freerolling_over_two_hosts_with_link_faults(tyrerig, domain_id, link, t
     print(f"\nTWO HOSTS run: GS2MF FreeRolling x{TIME_SCALE:.0f}, {len(seqs)} samples in B's log, "
           f"{lost} missing in {len(gaps)} gaps and a tail of {rec_tail} (all in the loss record); the rig made "
           f"{final.last_seq + 1}, its writer refused {refused}; the sequencer on A missed {a_lost}; "
-          f"test wall time {wall:.0f} s, load average {os.getloadavg()[0]:.1f}")
+          f"test wall time {wall:.0f} s, load average {os.getloadavg()[0]:.1f}; B's sockets dropped "
+          f"{overflow.total()} datagrams (receive buffers full), {lost_overloaded} samples lost in "
+          f"{len(healthy_gaps)} gaps on a healthy link as B fell behind")
     print(f"TWO HOSTS fault (a) link down 2 s | B noted the outage {detect_b['a']:.2f} s after it began; "
           f"{refused_text('a')}; {hold_text('a')} | B lost {lost_in['a']}, {when('a')} | {delay('a')}")
     if "b" in faults:
