@@ -28,7 +28,8 @@ all on one DDS domain, as docs/deployment.md describes.
    by gap range, and what the rig made after B's last sample (by the rig's own final count,
    `virtual_rig: published` on /diagnostics, recorded in B's log) is the record's tail; no loss
    begins while the link is healthy (only during a fault or in the seconds after it, as B
-   catches up); B notes each outage; the rig's writer refused nothing while the link was down
+   catches up, or while B's kernel drops datagrams at B's full sockets: B short of CPU, not the
+   link); B notes each outage; the rig's writer refused nothing while the link was down
    for 6 s (its own count before and after (c)) and the sequencer did not hold the rig then;
    every gap of more than 0.6 s in host A's own samples (the rig's writer refusing samples
    while B's readers hold its send window: B catching up after a fault, acknowledging as it
