@@ -399,6 +399,9 @@ struct Ctx<'a> {
     /// The operating point's smoother for state variables, where state candidates are scored
     /// against the form error with their state partialled out.
     partial_out: Option<std::sync::Arc<form::PartialOut>>,
+    /// The same smoother per fold, over the fold's training points only (its held-out
+    /// predictions partial the state as that fold's correction partials the residual).
+    partial_out_folds: Vec<std::sync::Arc<form::PartialOut>>,
 }
 
 /// The present model of a round and what scoring against it needs. A candidate's gain is
@@ -635,8 +638,22 @@ impl Ctx<'_> {
                 None => [0.0; 4],
             }
         };
-        let pred_ho =
-            linfit::cross_validate(ev, &fitted.design, &fixed, &fitted.lin, &self.fl, &target_fold, &add_fold, sigma);
+        let pred_ho = if ev.partialled(eff) && self.partial_out_folds.len() == self.fl.len() {
+            let evs: Vec<Evaluator> =
+                self.partial_out_folds.iter().map(|w| self.ev.partialled_out(eff, w.clone())).collect();
+            linfit::cross_validate_refolded(
+                &evs,
+                &fitted.design,
+                &fixed,
+                &fitted.lin,
+                &self.fl,
+                &target_fold,
+                &add_fold,
+                sigma,
+            )
+        } else {
+            linfit::cross_validate(ev, &fitted.design, &fixed, &fitted.lin, &self.fl, &target_fold, &add_fold, sigma)
+        };
         let model: Vec<EffectParams> = fixed.into_iter().chain(fitted.effects).collect();
         Some((CandidateFit { model, pred_fit: fitted.lin.pred, pred_ho }, k))
     }
@@ -1357,9 +1374,14 @@ pub fn diagnose(ds: &Dataset, base: &TyreParams, cfg: &DoctorConfig) -> Result<D
     };
     let bandwidths = Bandwidths::from_data(ds);
     let regions = find_regions(ds, &meas, &base_pred, &sigma);
-    let partial_out =
-        (cfg.form_correction && cfg.partial_out).then(|| std::sync::Arc::new(form::PartialOut::new(ds, &bandwidths)));
-    let ctx = Ctx { ds, base, cfg, ev, meas, sigma, fl, fold_of, all, n_res, coverage, partial_out };
+    let partialling = cfg.form_correction && cfg.partial_out;
+    let partial_out = partialling.then(|| std::sync::Arc::new(form::PartialOut::new(ds, &bandwidths)));
+    let partial_out_folds = if partialling {
+        form::PartialOut::per_fold(ds, &bandwidths, &fl).into_iter().map(std::sync::Arc::new).collect()
+    } else {
+        Vec::new()
+    };
+    let ctx = Ctx { ds, base, cfg, ev, meas, sigma, fl, fold_of, all, n_res, coverage, partial_out, partial_out_folds };
 
     let mut search = Search {
         model: Vec::new(),

@@ -334,13 +334,39 @@ pub struct PartialOut {
 }
 
 impl PartialOut {
-    /// The smoother's weights at every point of `ds`.
+    /// The smoother's weights at every point of `ds`, over all other visits (as the
+    /// correction of a fit on all sweeps, [`leave_one_sweep_out`], draws on them).
     pub fn new(ds: &Dataset, bw: &Bandwidths) -> Self {
+        let all: Vec<usize> = (0..ds.len()).collect();
+        Self::among(ds, bw, &all)
+    }
+
+    /// One smoother per fold, each over the other folds' points only, as that fold's
+    /// correction ([`cross_fitted`]) draws on them: held-out points from the training sweeps,
+    /// training points from the other training visits. Robinson's partialling takes the
+    /// operating point's share out of the state and of the residual with one smoother; with
+    /// the state partialled over all visits and the residual over the training ones, a cell
+    /// visited twice had its two visits' states contrasted in the fit while their residuals
+    /// were not (the held-out visit's residual is not in the fold's correction), and the
+    /// fold's coefficient followed the mismatch: on TTC-style runs the two visits of one cell
+    /// were predicted one better, one worse by about as much.
+    pub fn per_fold(ds: &Dataset, bw: &Bandwidths, folds: &[Vec<usize>]) -> Vec<Self> {
+        (0..folds.len())
+            .map(|fi| {
+                let train: Vec<usize> =
+                    folds.iter().enumerate().filter(|(j, _)| *j != fi).flat_map(|(_, v)| v.iter().copied()).collect();
+                Self::among(ds, bw, &train)
+            })
+            .collect()
+    }
+
+    /// The smoother's weights at every point of `ds` over the points `from` (other visits
+    /// only).
+    fn among(ds: &Dataset, bw: &Bandwidths, from: &[usize]) -> Self {
         use nalgebra::{Matrix6, Vector6};
         let x = scaled_points(ds, bw);
         let visit = visits(ds, &x);
-        let all: Vec<usize> = (0..ds.len()).collect();
-        let index = NeighbourIndex::new(&x, &all);
+        let index = NeighbourIndex::new(&x, from);
         let row_at = |k: usize| -> Vec<(u32, f32)> {
             let mut near: Vec<(usize, f64, Vector6<f64>)> = Vec::new();
             let mut a = Matrix6::<f64>::zeros();
@@ -583,5 +609,37 @@ mod tests {
         for k in (0..ds.len()).filter(|&k| ds.point_sweep(k) == 5) {
             assert!((a[1][k][0] - resid[k][1]).abs() < 3.0, "point {k}: {} vs {}", a[1][k][0], resid[k][1]);
         }
+    }
+
+    #[test]
+    fn a_fold_partials_the_state_over_its_training_points_as_its_correction_does() {
+        // The state and the residual are one and the same series: partialled per fold, the
+        // state's operating-point share at every point must be exactly the fold's correction
+        // of the residual (one smoother for both, Robinson), and never drawn from the fold's
+        // held-out points.
+        let (ds, resid) = dataset();
+        let held_out: Vec<usize> = (0..ds.len()).filter(|&k| ds.point_sweep(k) % 2 == 0).collect();
+        let folds = vec![held_out.clone(), (0..ds.len()).filter(|&k| ds.point_sweep(k) % 2 == 1).collect()];
+        let bw = Bandwidths::from_data(&ds);
+        let corr = cross_fitted(&ds, &resid, &folds, &bw);
+        let per_fold = PartialOut::per_fold(&ds, &bw, &folds);
+        let z: Vec<[f64; 1]> = resid.iter().map(|r| [r[0]]).collect();
+        for (fi, po) in per_fold.iter().enumerate() {
+            for (k, c) in corr[fi].iter().enumerate() {
+                let e = po.expected_at(&z, k)[0];
+                assert!((e - c[0]).abs() < 1e-3 * (1.0 + e.abs()), "fold {fi}, point {k}: {e} vs {}", c[0]);
+            }
+        }
+        // Whatever the held-out sweeps' state, fold 0's expectation does not move.
+        let mut changed = z.clone();
+        for &k in &held_out {
+            changed[k][0] += 1000.0;
+        }
+        for k in 0..ds.len() {
+            assert_eq!(per_fold[0].expected_at(&z, k), per_fold[0].expected_at(&changed, k), "point {k}");
+        }
+        // The smoother over all visits does draw on them.
+        let all = PartialOut::new(&ds, &bw);
+        assert!((0..ds.len()).any(|k| all.expected_at(&z, k) != all.expected_at(&changed, k)));
     }
 }

@@ -463,6 +463,47 @@ pub fn cross_validate(
     out
 }
 
+/// As [`cross_validate`], with each fold's own evaluator (`evs[fi]`: a state partialled out
+/// over that fold's training points, [`crate::form::PartialOut::per_fold`]): the design's
+/// basis values and the present prediction are taken again with it, the sensitivities kept.
+#[allow(clippy::too_many_arguments)]
+pub fn cross_validate_refolded(
+    evs: &[Evaluator<'_>],
+    design: &Design,
+    fixed: &[EffectParams],
+    lin: &Linearization,
+    folds: &[Vec<usize>],
+    target_of_fold: &dyn Fn(usize, usize) -> [f64; 4],
+    held_out_add: &dyn Fn(usize, usize) -> [f64; 4],
+    sigma: &[f64; 4],
+) -> Vec<[f64; 4]> {
+    let n_points = lin.pred.len();
+    let mut out = vec![[f64::NAN; 4]; n_points];
+    let mut terms: Vec<Vec<Term>> = vec![Vec::new(); design.effects.len()];
+    for c in &design.cols {
+        terms[c.slot].push(c.term);
+    }
+    let model0: Vec<EffectParams> = fixed.iter().cloned().chain(design.effects.iter().cloned()).collect();
+    let all: Vec<usize> = (0..n_points).collect();
+    for ((fi, test), ev) in folds.iter().enumerate().zip(evs) {
+        let train: Vec<usize> =
+            folds.iter().enumerate().filter(|(j, _)| *j != fi).flat_map(|(_, v)| v.iter().copied()).collect();
+        let d = Design::new(ev, design.effects.clone(), &terms);
+        let lin_f = Linearization { pred: ev.predict(&model0, &all), sens: lin.sens.clone() };
+        let delta = if d.cols.is_empty() {
+            DVector::zeros(0)
+        } else {
+            solve_bounded(&d, &normal(&d, &lin_f, &train, &|k| target_of_fold(fi, k), sigma))
+        };
+        let model: Vec<EffectParams> = fixed.iter().cloned().chain(d.updated(&delta)).collect();
+        for (&k, p) in test.iter().zip(ev.predict(&model, test)) {
+            let add = held_out_add(fi, k);
+            out[k] = std::array::from_fn(|ch| p[ch] + add[ch]);
+        }
+    }
+    out
+}
+
 /// The design of present state effects plus a new candidate with `choice` (its terms at 0).
 pub fn with_candidate(
     ev: &Evaluator<'_>,

@@ -274,14 +274,15 @@ fn thermal_hidden_in_relaxing_ttc_runs_is_named_beside_transient() {
         hidden_dat.push(out);
     }
     let d = doctor_with_fit(&hidden_dat, &dir.join("doctor_outsider"));
-    let names = named(&d);
-    assert_eq!(names, ["transient", "thermal"], "named {names:?}; {}", d["stop_reason"]);
+    let mut names = named(&d);
+    names.sort();
+    assert_eq!(names, ["thermal", "transient"], "named {names:?}; {}", d["stop_reason"]);
     let thermal = d["effects"].as_array().expect("effects").iter().find(|e| e["effect"] == "thermal").expect("thermal");
     let (before, after) = (
         thermal["rms_before_heldout"].as_f64().unwrap_or(0.0),
         thermal["rms_after_heldout"].as_f64().unwrap_or(f64::MAX),
     );
-    assert!(after < 0.7 * before, "thermal's region, held-out: {before} -> {after}");
+    assert!(after < 0.5 * before, "thermal's region, held-out: {before} -> {after}");
 }
 
 /// Issue 30: an outsider's wear hidden in relaxing TTC-style runs is named `wear`, beside
