@@ -164,6 +164,11 @@ pub fn fit_effects(
     (prob.unpack(&params), cost)
 }
 
+/// The points of every fold but `fi`: fold `fi`'s training points.
+pub fn training(folds: &[Vec<usize>], fi: usize) -> Vec<usize> {
+    folds.iter().enumerate().filter(|(j, _)| *j != fi).flat_map(|(_, v)| v.iter().copied()).collect()
+}
+
 /// Held-out folds: the sweeps, in a fixed pseudo-random order, dealt round-robin into `k`
 /// folds (balanced: fold sizes differ by at most one sweep).
 ///
@@ -255,8 +260,7 @@ fn cross_validate_with(
             },
             None => None,
         };
-        let train: Vec<usize> =
-            folds.iter().enumerate().filter(|(j, _)| *j != fi).flat_map(|(_, v)| v.iter().copied()).collect();
+        let train = training(folds, fi);
         let target: Vec<[f64; 4]> = match corr {
             Some(c) => meas.iter().zip(c).map(|(m, c)| std::array::from_fn(|ch| m[ch] - c[ch])).collect(),
             None => meas.to_vec(),

@@ -287,12 +287,7 @@ pub fn cross_fitted(ds: &Dataset, resid: &[[f64; 4]], folds: &[Vec<usize>], bw: 
         let handles: Vec<_> = (0..folds.len())
             .map(|fi| {
                 sc.spawn(move || {
-                    let train: Vec<usize> = folds
-                        .iter()
-                        .enumerate()
-                        .filter(|(j, _)| *j != fi)
-                        .flat_map(|(_, v)| v.iter().copied())
-                        .collect();
+                    let train = crate::fit::training(folds, fi);
                     let index = NeighbourIndex::new(x, &train);
                     (0..ds.len()).map(|k| smooth_at(ds, x, visit, resid, &index, k)).collect::<FoldCorrection>()
                 })
@@ -351,13 +346,7 @@ impl PartialOut {
     /// fold's coefficient followed the mismatch: on TTC-style runs the two visits of one cell
     /// were predicted one better, one worse by about as much.
     pub fn per_fold(ds: &Dataset, bw: &Bandwidths, folds: &[Vec<usize>]) -> Vec<Self> {
-        (0..folds.len())
-            .map(|fi| {
-                let train: Vec<usize> =
-                    folds.iter().enumerate().filter(|(j, _)| *j != fi).flat_map(|(_, v)| v.iter().copied()).collect();
-                Self::among(ds, bw, &train)
-            })
-            .collect()
+        (0..folds.len()).map(|fi| Self::among(ds, bw, &crate::fit::training(folds, fi))).collect()
     }
 
     /// The smoother's weights at every point of `ds` over the points `from` (other visits

@@ -443,24 +443,40 @@ pub fn cross_validate(
     held_out_add: &dyn Fn(usize, usize) -> [f64; 4],
     sigma: &[f64; 4],
 ) -> Vec<[f64; 4]> {
-    let n_points = lin.pred.len();
-    let mut out = vec![[f64::NAN; 4]; n_points];
-    let m = design.cols.len();
-    for (fi, test) in folds.iter().enumerate() {
-        let train: Vec<usize> =
-            folds.iter().enumerate().filter(|(j, _)| *j != fi).flat_map(|(_, v)| v.iter().copied()).collect();
-        let delta = if m == 0 {
-            DVector::zeros(0)
-        } else {
-            solve_bounded(design, &normal(design, lin, &train, &|k| target_of_fold(fi, k), sigma))
-        };
-        let model: Vec<EffectParams> = fixed.iter().cloned().chain(design.updated(&delta)).collect();
-        for (&k, p) in test.iter().zip(ev.predict(&model, test)) {
-            let add = held_out_add(fi, k);
-            out[k] = std::array::from_fn(|ch| p[ch] + add[ch]);
-        }
+    let mut out = vec![[f64::NAN; 4]; lin.pred.len()];
+    for fi in 0..folds.len() {
+        predict_fold(ev, design, fixed, lin, folds, fi, target_of_fold, held_out_add, sigma, &mut out);
     }
     out
+}
+
+/// Fold `fi` of a cross-validation: the design solved on the other folds' points, the fold's
+/// points predicted by the model with those coefficients plus `held_out_add`, into `out`.
+#[allow(clippy::too_many_arguments)]
+fn predict_fold(
+    ev: &Evaluator<'_>,
+    design: &Design,
+    fixed: &[EffectParams],
+    lin: &Linearization,
+    folds: &[Vec<usize>],
+    fi: usize,
+    target_of_fold: &dyn Fn(usize, usize) -> [f64; 4],
+    held_out_add: &dyn Fn(usize, usize) -> [f64; 4],
+    sigma: &[f64; 4],
+    out: &mut [[f64; 4]],
+) {
+    let train = crate::fit::training(folds, fi);
+    let delta = if design.cols.is_empty() {
+        DVector::zeros(0)
+    } else {
+        solve_bounded(design, &normal(design, lin, &train, &|k| target_of_fold(fi, k), sigma))
+    };
+    let model: Vec<EffectParams> = fixed.iter().cloned().chain(design.updated(&delta)).collect();
+    let test = &folds[fi];
+    for (&k, p) in test.iter().zip(ev.predict(&model, test)) {
+        let add = held_out_add(fi, k);
+        out[k] = std::array::from_fn(|ch| p[ch] + add[ch]);
+    }
 }
 
 /// As [`cross_validate`], with each fold's own evaluator (`evs[fi]`: a state partialled out
@@ -485,21 +501,10 @@ pub fn cross_validate_refolded(
     }
     let model0: Vec<EffectParams> = fixed.iter().cloned().chain(design.effects.iter().cloned()).collect();
     let all: Vec<usize> = (0..n_points).collect();
-    for ((fi, test), ev) in folds.iter().enumerate().zip(evs) {
-        let train: Vec<usize> =
-            folds.iter().enumerate().filter(|(j, _)| *j != fi).flat_map(|(_, v)| v.iter().copied()).collect();
+    for (fi, ev) in evs.iter().enumerate().take(folds.len()) {
         let d = Design::new(ev, design.effects.clone(), &terms);
         let lin_f = Linearization { pred: ev.predict(&model0, &all), sens: lin.sens.clone() };
-        let delta = if d.cols.is_empty() {
-            DVector::zeros(0)
-        } else {
-            solve_bounded(&d, &normal(&d, &lin_f, &train, &|k| target_of_fold(fi, k), sigma))
-        };
-        let model: Vec<EffectParams> = fixed.iter().cloned().chain(d.updated(&delta)).collect();
-        for (&k, p) in test.iter().zip(ev.predict(&model, test)) {
-            let add = held_out_add(fi, k);
-            out[k] = std::array::from_fn(|ch| p[ch] + add[ch]);
-        }
+        predict_fold(ev, &d, fixed, &lin_f, folds, fi, target_of_fold, held_out_add, sigma, &mut out);
     }
     out
 }
