@@ -66,6 +66,7 @@ fn score_json(c: &CandidateScore) -> Value {
         "p_value": c.p_value,
         "family": c.family,
         "form_corrected": c.form_corrected,
+        "support": c.support,
     })
 }
 

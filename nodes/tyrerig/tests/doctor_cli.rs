@@ -283,6 +283,22 @@ fn thermal_hidden_in_relaxing_ttc_runs_is_named_beside_transient() {
         thermal["rms_after_heldout"].as_f64().unwrap_or(f64::MAX),
     );
     assert!(after < 0.5 * before, "thermal's region, held-out: {before} -> {after}");
+    // Its score says which sweeps carry it: named sweeps of these runs, gaining on net.
+    let scored = d["rounds"]
+        .as_array()
+        .expect("rounds")
+        .iter()
+        .flat_map(|r| r.as_array().into_iter().flatten())
+        .find(|c| c["effect"] == "thermal" && c["significant"] == true)
+        .expect("a significant thermal score");
+    let support = &scored["support"];
+    let first = &support["carried_by"][0];
+    assert!(
+        first["name"].as_str().is_some_and(|n| !n.is_empty()) && first["chi2_gain"].as_f64() > Some(0.0),
+        "{support}"
+    );
+    assert!(support["carrying_sweeps"].as_f64() >= Some(1.0), "{support}");
+    assert!(support["gained_chi2"].as_f64() > support["lost_chi2"].as_f64(), "{support}");
 }
 
 /// Issue 30: an outsider's wear hidden in relaxing TTC-style runs is named `wear`, beside
