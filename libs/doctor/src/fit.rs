@@ -176,7 +176,10 @@ pub fn training(folds: &[Vec<usize>], fi: usize) -> Vec<usize> {
 /// loads per slip-angle/camber cell), and with four folds every fold would then hold exactly one
 /// load — each held-out fold an extrapolation in load, and an effect that varies with load
 /// (heating does) would fail every fold however right it is. The order is a fixed permutation
-/// (a hash of the ordinal), so a diagnosis is deterministic.
+/// (a hash of the ordinal), so a diagnosis is deterministic. Nor blocks of consecutive sweeps
+/// (each log's first sweeps in different folds): more effects found, but states that drift with
+/// time then fit each other's drift and false names were added (docs/doctor-benchmark.md, "Fold
+/// plans that spread each log's first sweeps").
 pub fn folds(ev: &Evaluator<'_>, k: usize) -> Vec<Vec<usize>> {
     let k = k.max(1);
     let fold_of = sweep_folds(ev.ds.sweeps.len(), k);
