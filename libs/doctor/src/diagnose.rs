@@ -582,7 +582,7 @@ impl Ctx<'_> {
         let p_value = bootstrap_p(&gains, penalty, self.cfg.bootstrap_resamples, eff as u64);
         let alpha = self.cfg.false_naming_rate / m_tests.max(1) as f64;
         let unphysical = self.unphysical(eff, &fit.model);
-        let holds = evidence >= self.cfg.min_evidence && improved + 1 >= self.fl.len() && unphysical.is_none();
+        let holds = evidence >= self.cfg.min_evidence && enough_folds(improved, self.fl.len()) && unphysical.is_none();
         let mut significant = holds && p_value <= alpha;
         let support = SweepSupport::of(&gains, &self.ds.sweeps);
         let mut reason = if evidence >= self.cfg.min_evidence && p_value > alpha {
@@ -1378,7 +1378,7 @@ impl Ctx<'_> {
         let alone = round.iter().find(|s| s.effect == last);
         let stands = |s: &CandidateScore| {
             s.evidence >= self.cfg.min_evidence
-                && s.folds_improved + 1 >= s.folds
+                && enough_folds(s.folds_improved, s.folds)
                 && s.p_value <= self.cfg.false_naming_rate
         };
         // And it must still be the effect it is named after in the model it is left in (wear
@@ -1763,6 +1763,13 @@ fn find_regions(ds: &Dataset, meas: &[[f64; 4]], pred: &[[f64; 4]], sigma: &[f64
     out
 }
 
+/// Whether a candidate improved enough of the held-out folds: all but a quarter of them (at
+/// least one may lose). With four folds, three — the rule since folds were four; with eight,
+/// six, not seven: more folds each hold fewer sweeps, and one fold's loss weighs less.
+fn enough_folds(improved: usize, folds: usize) -> bool {
+    improved + (folds / 4).max(1) >= folds
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -1778,6 +1785,16 @@ mod tests {
                 coupled: false,
             })
             .collect()
+    }
+
+    #[test]
+    fn enough_folds_lets_a_quarter_of_the_folds_lose_and_at_least_one() {
+        // Four folds (the default): three must improve, as before the rule had a name.
+        assert!(enough_folds(3, 4) && enough_folds(4, 4) && !enough_folds(2, 4));
+        // Fewer folds: still one may lose.
+        assert!(enough_folds(1, 2) && !enough_folds(0, 2));
+        // Eight: six of them, not seven.
+        assert!(enough_folds(6, 8) && !enough_folds(5, 8));
     }
 
     #[test]

@@ -12,7 +12,7 @@
 //!    variable and a parametric extension; each is fitted on training sweeps and scored on
 //!    held-out sweeps (folds of sweeps in a fixed shuffled order) by the share of the held-out χ² it explains after a
 //!    k·ln N penalty for its parameters. The best is named only when that evidence exceeds a
-//!    threshold and it improves every held-out fold but at most one; then the search repeats
+//!    threshold and it improves every held-out fold but a quarter (at least one may lose); then the search repeats
 //!    greedily with the named effects in the model, until nothing significant remains.
 //! 4. **Adds** it: the extension is fitted on all sweeps and written into the `.tir`
 //!    ([`extension`]: refitted MF coefficients in their sections, new terms in

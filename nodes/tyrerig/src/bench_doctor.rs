@@ -43,6 +43,10 @@ pub struct DoctorBench {
     /// The launch-config directory (rig configs, procedures, the MF tyre)
     #[arg(long, default_value = "launch-config")]
     pub launch_config: PathBuf,
+    /// One more argument for every case's `tyrerig doctor` (repeatable, e.g.
+    /// `--doctor-arg=--folds --doctor-arg=8`): to measure a setting of the doctor on all cases
+    #[arg(long = "doctor-arg", allow_hyphen_values = true)]
+    pub doctor_args: Vec<String>,
 }
 
 /// Runs the benchmark.
@@ -130,7 +134,7 @@ fn diagnose_case(args: &DoctorBench, case: &Case, clean: &[PathBuf], record: &mu
     let (logs, truth) = steps::inject(case, &rig_config, clean, &case_dir)?;
     record.truth = truth;
     let inputs = if case.plan.through_ttc() { steps::export_ttc(&logs, &case_dir)? } else { logs.clone() };
-    let verdict = steps::doctor(&args.launch_config, case.tyre, &inputs, &case_dir.join("doctor"));
+    let verdict = steps::doctor(&args.launch_config, case.tyre, &inputs, &args.doctor_args, &case_dir.join("doctor"));
     if !args.keep_logs {
         // Only the case's own files: never the shared clean logs.
         let own: std::collections::BTreeSet<&PathBuf> =

@@ -111,8 +111,9 @@ pub struct Verdict {
 
 /// Runs `tyrerig doctor` (this binary) on `inputs` into `out` and reads its `doctor.json`.
 /// The MF tyre is diagnosed against its own .tir (`--model`), a brush tyre against an MF fit
-/// to the same logs (`--fit`; its MX stage skipped: the doctor does not diagnose MX).
-pub fn doctor(launch: &Path, tyre: Tyre, inputs: &[PathBuf], out: &Path) -> Result<Verdict> {
+/// to the same logs (`--fit`; its MX stage skipped: the doctor does not diagnose MX). `extra`
+/// goes on the command line after those.
+pub fn doctor(launch: &Path, tyre: Tyre, inputs: &[PathBuf], extra: &[String], out: &Path) -> Result<Verdict> {
     let exe = std::env::current_exe().context("locating the tyrerig binary")?;
     let mut cmd = Command::new(exe);
     cmd.arg("doctor").args(inputs).arg("--out").arg(out);
@@ -120,6 +121,7 @@ pub fn doctor(launch: &Path, tyre: Tyre, inputs: &[PathBuf], out: &Path) -> Resu
         Tyre::Mf => cmd.arg("--model").arg(launch.join("tyres/MagicFormula61_Paramerters.tir")),
         Tyre::BrushRoad | Tyre::BrushRace => cmd.args(["--fit", "--skip-stage", "mx"]),
     };
+    cmd.args(extra);
     let o = cmd.output().context("running tyrerig doctor")?;
     let log = out.join("doctor.log");
     let text =
