@@ -1026,7 +1026,7 @@ impl Ctx<'_> {
                 out.push(format!(
                     "{} not identifiable from these logs: it explains {:.1} % of the held-out residual when the model's \
                      operating-point misfit is left in, {:.1} % once it is taken out — its state varies with the \
-                     operating point ({}); revisit a cell at another {}",
+                     operating point ({}); {}",
                     s.effect.name(),
                     100.0 * plain.evidence,
                     100.0 * s.evidence,
@@ -1399,18 +1399,22 @@ impl Ctx<'_> {
     }
 }
 
-/// What a state effect needs to be told from the operating point.
+/// What a state effect needs to be told from the operating point: why these logs cannot, and
+/// what to run so that they can.
 fn revisit_hint(e: Effect) -> (&'static str, &'static str) {
     match e {
-        Effect::Thermal => {
-            ("each cell visited once, at one temperature", "temperature (after a thermal pause or a warm-up)")
-        }
+        Effect::Thermal => (
+            "each cell visited once, at one temperature",
+            "revisit a cell at another temperature (after a thermal pause or a warm-up)",
+        ),
         Effect::Wear | Effect::BreakIn => (
             "each cell visited once, at one stage of the tyre's life",
-            "stage of the tyre's life (repeat a sweep late in the test)",
+            "revisit a cell at another stage of the tyre's life (repeat a sweep late in the test)",
         ),
-        Effect::Speed => ("each cell run at one speed", "speed"),
-        Effect::Specimen => ("each tyre run over its own cells", "cell on both tyres"),
+        Effect::Speed => ("each cell run at one speed", "revisit a cell at another speed"),
+        // Was "revisit a cell at another cell on both tyres": a specimen is told apart by one
+        // cell run on every tyre, not by a revisit.
+        Effect::Specimen => ("each tyre run over its own cells", "run one cell on every tyre"),
         _ => ("", ""),
     }
 }
@@ -1785,6 +1789,16 @@ mod tests {
                 coupled: false,
             })
             .collect()
+    }
+
+    #[test]
+    fn every_state_effect_gets_advice_that_reads_as_a_sentence() {
+        for e in [Effect::Thermal, Effect::Wear, Effect::BreakIn, Effect::Speed, Effect::Specimen] {
+            let (why, advice) = revisit_hint(e);
+            assert!(!why.is_empty() && !advice.is_empty(), "{e:?}");
+            assert!(!advice.contains("another cell"), "{e:?}: {advice}");
+        }
+        assert_eq!(revisit_hint(Effect::Specimen).1, "run one cell on every tyre");
     }
 
     #[test]
