@@ -1567,6 +1567,7 @@ pub fn diagnose(ds: &Dataset, base: &TyreParams, cfg: &DoctorConfig) -> Result<D
         if round.form_error.is_some() {
             not_identifiable = ctx.not_identifiable(&round, &scores, m_tests);
         }
+        not_identifiable.extend(undecided(&scores, m_tests, cfg));
         stop_reason = no_candidate_reason(&scores, &order, cfg);
         rounds.push(scores);
         break;
@@ -1639,6 +1640,43 @@ fn state_explains_more(scores: &[CandidateScore], ahead: &[usize], bi: usize, cf
 }
 
 /// Why nothing was added in the last round.
+/// State candidates the logs leave undecided: each explains enough of the held-out residual
+/// and improves enough folds, but its gain is too uneven over sweeps to be named at the
+/// round's rate — typically a state the plan varies mostly with the operating point, so that
+/// only a few sweeps (a cell visited again in another state) tell it apart. Said with the test
+/// that would decide it, rather than left as a bare "not significant".
+fn undecided(scores: &[CandidateScore], m_tests: usize, cfg: &DoctorConfig) -> Vec<String> {
+    let alpha = cfg.false_naming_rate / m_tests.max(1) as f64;
+    scores
+        .iter()
+        .filter(|s| {
+            s.testable
+                && !s.significant
+                && matches!(s.effect, Effect::Thermal | Effect::Wear | Effect::BreakIn | Effect::Speed)
+                && s.evidence >= cfg.min_evidence
+                && enough_folds(s.folds_improved, s.folds)
+                && s.p_value > alpha
+        })
+        .map(|s| {
+            let sp = &s.support;
+            format!(
+                "{} undecided from these logs: it explains {:.1} % of the held-out residual and improves {}/{} folds, \
+                 but unevenly over sweeps (bootstrap p = {:.3}, naming needs ≤ {alpha:.4}: {:.0} of held-out χ² gained \
+                 over ≈{:.0} sweeps, {:.0} lost on others); {} to decide it",
+                s.effect.name(),
+                100.0 * s.evidence,
+                s.folds_improved,
+                s.folds,
+                s.p_value,
+                sp.gained_chi2,
+                sp.carrying_sweeps,
+                sp.lost_chi2.abs(),
+                revisit_hint(s.effect).1
+            )
+        })
+        .collect()
+}
+
 fn no_candidate_reason(scores: &[CandidateScore], order: &[usize], cfg: &DoctorConfig) -> String {
     match order.first().copied() {
         Some(i) if !scores[i].reason.is_empty() => {
@@ -1789,6 +1827,57 @@ mod tests {
                 coupled: false,
             })
             .collect()
+    }
+
+    fn scored(effect: Effect, evidence: f64, folds_improved: usize, p_value: f64, significant: bool) -> CandidateScore {
+        CandidateScore {
+            effect,
+            family: effect.family(),
+            testable: true,
+            reason: String::new(),
+            n_params: 3,
+            chi2_before_heldout: 100.0,
+            chi2_after_heldout: 100.0 * (1.0 - evidence),
+            folds_improved,
+            folds: 4,
+            evidence,
+            p_value,
+            delta_chi2_by_channel: [0.0; 4],
+            significant,
+            form_corrected: true,
+            support: SweepSupport {
+                carrying_sweeps: 11.0,
+                gained_chi2: 22_024.0,
+                lost_chi2: -9_605.0,
+                ..Default::default()
+            },
+        }
+    }
+
+    #[test]
+    fn a_state_that_holds_on_folds_but_is_uneven_over_sweeps_is_undecided_with_the_test_that_decides_it() {
+        let cfg = DoctorConfig::default();
+        let scores = [
+            // The outsider's thermal effect in relaxing TTC-style runs, as scored.
+            scored(Effect::Thermal, 0.073, 3, 0.065, false),
+            // Named already: nothing to decide.
+            scored(Effect::Wear, 0.2, 4, 0.0005, true),
+            // Too little evidence, or too few folds: not a candidate to decide.
+            scored(Effect::BreakIn, 0.03, 4, 0.065, false),
+            scored(Effect::Speed, 0.08, 2, 0.065, false),
+            // A form error is no state to revisit.
+            scored(Effect::Camber, 0.08, 4, 0.065, false),
+        ];
+        let out = undecided(&scores, 7, &cfg);
+        assert_eq!(out.len(), 1, "{out:?}");
+        assert!(out[0].starts_with("thermal undecided from these logs: it explains 7.3 %"), "{}", out[0]);
+        assert!(out[0].contains("p = 0.065, naming needs ≤ 0.0071"), "{}", out[0]);
+        assert!(out[0].contains("9605 lost"), "{}", out[0]);
+        assert!(
+            out[0].ends_with("revisit a cell at another temperature (after a thermal pause or a warm-up) to decide it")
+        );
+        // Significant at the round's rate: nothing undecided.
+        assert!(undecided(&[scored(Effect::Thermal, 0.073, 3, 0.005, false)], 7, &cfg).is_empty());
     }
 
     #[test]
