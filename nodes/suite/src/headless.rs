@@ -41,7 +41,19 @@ pub enum HeadlessError {
     Log(#[from] LogWriteError),
     #[error("the procedure did not finish within {limit_s} s of rig time (at {at})")]
     TooLong { limit_s: f64, at: String },
+    #[error(
+        "the thermal gate held the rig for {held_s:.0} s of rig time on a sensor fault ({fault}) at {at}; \
+         a headless run has no operator to clear it{hint}"
+    )]
+    SensorFaultHeld { held_s: f64, fault: String, at: String, hint: String },
 }
+
+/// Rig time a headless run lets the thermal gate hold on a sensor fault before it ends the run.
+/// On a real rig the gate holds and an operator clears the fault; headless, nothing will, and
+/// the run would otherwise go on to its rig-time limit (`--effects none` on a GS2MF run: a
+/// temperature that never changes is a stuck sensor, and 200,000 s of held rig time wrote a
+/// 2.4 GB log). Ten minutes is well beyond the gate's own recovery time.
+pub const SENSOR_FAULT_HOLD_LIMIT_S: f64 = 600.0;
 
 /// A ready-to-run headless suite.
 pub struct Headless {
@@ -326,6 +338,26 @@ impl Headless {
         Ok(())
     }
 
+    /// The error ending a run whose gate held on a sensor fault for `held_s`, with what to do
+    /// where the virtual rig's own settings cause it.
+    fn sensor_fault_held(&self, held_s: f64, fault: &str, t: f64) -> HeadlessError {
+        let st = self.seq.procedure_state(t);
+        let effects = &self.rig_cfg.effects;
+        let hint = if !effects.thermal && !effects.noise {
+            ". Without `thermal` or `noise` in --effects the virtual tyre's temperature never changes, \
+             which the gate reads as a stuck sensor, as it must: add one of them"
+                .to_owned()
+        } else {
+            String::new()
+        };
+        HeadlessError::SensorFaultHeld {
+            held_s,
+            fault: fault.to_owned(),
+            at: format!("{} / {} / {}", st.procedure, st.section, st.sweep_name),
+            hint,
+        }
+    }
+
     /// Runs the procedure to its end. `progress` receives the sequencer's progress (0..1).
     pub fn run(
         &mut self,
@@ -353,6 +385,8 @@ impl Headless {
         let mut in_sweep = false;
         // Rig time a slot has waited for the live model to see the sweep before it.
         let mut plan_wait_from: Option<f64> = None;
+        // Rig time since the gate went into a sensor fault it has not left.
+        let mut fault_from: Option<f64> = None;
         loop {
             let Some(local) = self.rig.step() else { continue };
             let sample = self.retime(local);
@@ -373,6 +407,15 @@ impl Headless {
                     thermal::core::AlarmLevel::Error => "ERROR",
                 };
                 sum.alarm(level, a.check.as_str(), a.message.clone(), a.rig_time_s);
+            }
+
+            if th.state.status == tyre_msgs::ThermalState::STATUS_FAULT {
+                let since = *fault_from.get_or_insert(t);
+                if t - since >= SENSOR_FAULT_HOLD_LIMIT_S {
+                    return Err(self.sensor_fault_held(t - since, &th.state.fault, t));
+                }
+            } else {
+                fault_from = None;
             }
 
             let p = self.pipeline.on_sample(&sample);

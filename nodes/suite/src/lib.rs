@@ -12,7 +12,7 @@ pub mod sink;
 pub mod spec;
 pub mod summary;
 
-pub use headless::{Headless, HeadlessError};
+pub use headless::{Headless, HeadlessError, SENSOR_FAULT_HOLD_LIMIT_S};
 pub use sink::{McapSink, MessageSink, NullSink, Outgoing};
 pub use spec::{ProcedureChoice, RunSpec};
 pub use summary::{Alarm, ProcedureTimes, RunSummary, summary_from_log};

@@ -180,3 +180,25 @@ fn gs2mf_runs_on_both_brush_tyres() {
         }
     }
 }
+
+/// A headless run has no operator to clear a sensor fault: a gate held on one ends the run with
+/// the fault named, instead of running to the rig-time limit (`--effects none` on GS2MF: a
+/// temperature that never changes is a stuck sensor, and the run wrote 2.4 GB before it stopped).
+#[test]
+fn a_sensor_fault_nobody_can_clear_ends_a_headless_run_with_the_fault_named() {
+    let mut spec = RunSpec::new(&launch_config(), ProcedureChoice::FreeRolling);
+    spec.effects = Some("none".to_owned());
+    let mut h = Headless::new(&spec, thermal::ThermalConfig::default(), sequencer::SequencerConfig::default())
+        .expect("headless suite builds");
+    let err = h.run(&mut NullSink::default(), &mut |_, _| {}).expect_err("a stuck temperature must not run on");
+    let text = err.to_string();
+    println!("{text}");
+    assert!(
+        matches!(err, suite::HeadlessError::SensorFaultHeld { held_s, .. } if held_s >= suite::SENSOR_FAULT_HOLD_LIMIT_S)
+    );
+    assert!(text.contains("stuck"), "{text}");
+    assert!(text.contains("add one of them"), "{text}");
+    // With noise the same tyre (no heat model) reads as a live sensor and the run completes.
+    let (s, _) = run(ProcedureChoice::FreeRolling, |spec| spec.effects = Some("noise".to_owned()));
+    assert!(s.completed, "{s:?}");
+}
