@@ -207,10 +207,18 @@ pub fn run(cmd: BenchCmd) -> anyhow::Result<()> {
                 }
                 lat_us
             });
-            // Wait for discovery with probes, then the timed stream.
+            // Wait for discovery with probes, then the timed stream. A probe may fail before
+            // discovery completes; that is what the probes wait out, so failures are only counted.
+            let mut failed_probes = 0usize;
             for _ in 0..30 {
-                let _ = publisher.publish(RigSample { seq: u64::MAX, ..sample(0) });
+                if let Err(e) = publisher.publish(RigSample { seq: u64::MAX, ..sample(0) }) {
+                    failed_probes += 1;
+                    tracing::debug!(error = ?e, "discovery probe not published");
+                }
                 tokio::time::sleep(Duration::from_millis(100)).await;
+            }
+            if failed_probes > 0 {
+                tracing::info!(failed_probes, "discovery probes not published (before discovery completed)");
             }
             let mut tick = tokio::time::interval(Duration::from_secs_f64(1.0 / rate_hz));
             for seq in 0..total {
