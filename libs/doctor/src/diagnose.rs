@@ -1639,7 +1639,6 @@ fn state_explains_more(scores: &[CandidateScore], ahead: &[usize], bi: usize, cf
     ))
 }
 
-/// Why nothing was added in the last round.
 /// State candidates the logs leave undecided: each explains enough of the held-out residual
 /// and improves enough folds, but its gain is too uneven over sweeps to be named at the
 /// round's rate — typically a state the plan varies mostly with the operating point, so that
@@ -1677,6 +1676,7 @@ fn undecided(scores: &[CandidateScore], m_tests: usize, cfg: &DoctorConfig) -> V
         .collect()
 }
 
+/// Why nothing was added in the last round.
 fn no_candidate_reason(scores: &[CandidateScore], order: &[usize], cfg: &DoctorConfig) -> String {
     match order.first().copied() {
         Some(i) if !scores[i].reason.is_empty() => {
