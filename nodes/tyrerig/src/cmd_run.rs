@@ -30,7 +30,7 @@ pub struct RunArgs {
     /// Virtual-rig effects: none | all | comma list of transient, thermal, thermal_grip, wear,
     /// break_in, noise, chatter, rim_slip (default: the rig config's). Without `thermal` or
     /// `noise` the tread temperature never changes and the thermal gate holds on it as a stuck
-    /// sensor (a headless run ends after 600 s of such a hold): `none,noise` for a clean tyre.
+    /// sensor (a headless run then ends with the fault named): `none,noise` for a clean tyre.
     #[arg(long)]
     pub effects: Option<String>,
     /// Multiply the virtual tyre's wear rate (e.g. 5 to rehearse the wear alarm).
