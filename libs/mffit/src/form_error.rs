@@ -16,9 +16,10 @@
 //! 3. the noise variance s² from the differences of neighbouring residuals in slip within each
 //!    sweep (a difference of two noisy points has variance 2s²; the smooth part cancels);
 //! 4. qᵢ = mᵢ² − s²/kᵢ, an unbiased estimate of the squared smooth residual at point i;
-//! 5. at a grid point x, the form-error variance τ²(x) = mean of qᵢ over the points in the region
-//!    around x (load ±15 % Fz0, camber ±0.75°, pressure ±20 kPa, slip ±[`REGION_SLIP_ANGLE_DEG`]
-//!    or ±[`REGION_SLIP_RATIO`]), at least 0.
+//! 5. at a grid point x, the form-error variance τ²(x): the mean over sweeps of each sweep's mean
+//!    qᵢ in the region around x (load ±15 % Fz0, camber ±0.75°, pressure ±20 kPa, slip
+//!    ±[`REGION_SLIP_ANGLE_DEG`] or ±[`REGION_SLIP_RATIO`]), shrunk toward the same mean over the
+//!    whole stage (the region's k sweeps against one sweep's weight for the stage), at least 0.
 //!
 //! Between data points the model's error against the true tyre is taken to be of the size the
 //! held-out residuals show nearby (no more, no less: nothing is tuned to a coverage). In-sample
@@ -145,6 +146,10 @@ pub struct FormError {
     inputs: Vec<MfInput>,
     /// qᵢ = mᵢ² − s²/kᵢ (may be negative: unbiased, not clamped per point).
     q: Vec<f64>,
+    /// The sweep of each point.
+    sweep: Vec<usize>,
+    /// The stage-wide form-error variance: the mean of qᵢ over the sweeps' means, at least 0.
+    pooled_var: f64,
     axis: SlipAxis,
     fz0_n: f64,
     /// The pooled noise variance s², channel units².
@@ -165,7 +170,8 @@ impl FormError {
         let mut mean = vec![f64::NAN; n];
         let mut count = vec![0usize; n];
         // Noise from neighbours in slip: r_{j+1} − r_j has variance 2s² plus the (small) change
-        // of the smooth part between them.
+        // of the smooth part between them. Pooled over the stage: a local estimate from the few
+        // pairs of one window (tried) is so noisy that the regions' clamped means come out wider.
         let (mut diffs, mut pairs) = (0.0, 0usize);
         for idx in by_group.values_mut() {
             idx.sort_by(|&a, &b| slip[a].total_cmp(&slip[b]));
@@ -190,11 +196,14 @@ impl FormError {
         let noise_var = if pairs == 0 { 0.0 } else { diffs / (2.0 * pairs as f64) };
         let mut inputs = Vec::with_capacity(n);
         let mut q = Vec::with_capacity(n);
+        let mut sweep = Vec::with_capacity(n);
         for i in (0..n).filter(|&i| count[i] > 0) {
             inputs.push(points[i].input);
             q.push(mean[i] * mean[i] - noise_var / count[i] as f64);
+            sweep.push(groups[i]);
         }
-        FormError { inputs, q, axis, fz0_n, noise_var }
+        let pooled_var = mean_over_sweeps(&q, &sweep).max(0.0);
+        FormError { inputs, q, sweep, pooled_var, axis, fz0_n, noise_var }
     }
 
     /// The pooled noise variance the smooth residuals were corrected for, channel units².
@@ -236,21 +245,61 @@ impl FormError {
             for i in members {
                 let x = &xs[i];
                 let slip = self.axis.of(x);
-                let (mut sum, mut n, mut tested) = (0.0, 0usize, false);
+                let mut tested = false;
+                let (mut q, mut sweep) = (Vec::new(), Vec::new());
                 for &j in &near {
                     let d = &self.inputs[j];
                     if (self.axis.of(d) - slip).abs() <= self.axis.region() {
-                        sum += self.q[j];
-                        n += 1;
+                        q.push(self.q[j]);
+                        sweep.push(self.sweep[j]);
                     }
                     tested |= (d.alpha_rad - x.alpha_rad).abs() <= TESTED_SLIP_ANGLE_DEG.to_radians()
                         && (d.kappa - x.kappa).abs() <= TESTED_SLIP_RATIO;
                 }
-                out[i] = Region { std: (n > 0).then(|| (sum / n as f64).max(0.0).sqrt()), tested };
+                out[i] = Region { std: (!q.is_empty()).then(|| self.shrunk_var(&q, &sweep).sqrt()), tested };
             }
         }
         out
     }
+}
+
+impl FormError {
+    /// The region's form-error variance, shrunk toward the stage-wide one: the region's own
+    /// estimate (the mean of its sweeps' mean qᵢ) counts as many sweeps as it holds, the
+    /// stage-wide one as [`POOLED_WEIGHT_SWEEPS`]. A region one or two sweeps inform says little
+    /// on its own — its noise-corrected mean is often 0 beside a region reading several times the
+    /// stage's form error — and the data as a whole say how large the form error tends to be.
+    fn shrunk_var(&self, q: &[f64], sweep: &[usize]) -> f64 {
+        let sweeps = distinct(sweep) as f64;
+        let own = mean_over_sweeps(q, sweep);
+        ((sweeps * own + POOLED_WEIGHT_SWEEPS * self.pooled_var) / (sweeps + POOLED_WEIGHT_SWEEPS)).max(0.0)
+    }
+}
+
+/// Weight of the stage-wide form error in a region's estimate, in sweeps.
+const POOLED_WEIGHT_SWEEPS: f64 = 1.0;
+
+/// The mean over sweeps of each sweep's mean of `q` (each sweep counts once, however many
+/// points it has); 0 when empty.
+fn mean_over_sweeps(q: &[f64], sweep: &[usize]) -> f64 {
+    let mut by: std::collections::BTreeMap<usize, (f64, usize)> = Default::default();
+    for (&v, &g) in q.iter().zip(sweep) {
+        let e = by.entry(g).or_default();
+        e.0 += v;
+        e.1 += 1;
+    }
+    if by.is_empty() {
+        return 0.0;
+    }
+    by.values().map(|(s, n)| s / *n as f64).sum::<f64>() / by.len() as f64
+}
+
+/// How many distinct values `v` holds.
+fn distinct(v: &[usize]) -> usize {
+    let mut v = v.to_vec();
+    v.sort_unstable();
+    v.dedup();
+    v.len()
 }
 
 /// The form error around one operating point.
@@ -369,5 +418,29 @@ mod tests {
         assert!((tau - 5.0).abs() < 0.2, "τ {tau}");
         let far = MfInput { gamma_rad: 4f64.to_radians(), ..p[1000].input };
         assert_eq!(f.std_at(&far), None);
+    }
+
+    #[test]
+    fn a_region_one_sweep_informs_leans_on_the_stage_wide_form_error() {
+        // Five sweeps at loads 1,000 N apart (one per region: ±15 % of Fz0 = ±600 N), four
+        // missing the data by 5 units and one by none, under noise of 1. Stage-wide, the form
+        // error's variance is ~20 (four of five sweeps at 25): the clean sweep's region, on its
+        // own evidence 0, reads √((0 + 20)/2) ≈ 3.2; a biased one √((25 + 20)/2) ≈ 4.7.
+        let e = noise(5 * 401);
+        let (mut pts, mut groups, mut values) = (Vec::new(), Vec::new(), Vec::new());
+        for s in 0..5 {
+            let bias = if s == 4 { 0.0 } else { 5.0 };
+            let (p, _, v) = sweep(|_| bias, &e[s * 401..(s + 1) * 401]);
+            for (mut pt, val) in p.into_iter().zip(v) {
+                pt.input.fz_n = 2000.0 + 1000.0 * s as f64;
+                pts.push(pt);
+                groups.push(s);
+                values.push(val);
+            }
+        }
+        let f = FormError::of(&pts, &groups, &values, SlipAxis::Angle, 4000.0);
+        let at = |s: usize| f.std_at(&pts[s * 401 + 200].input).expect("data in the region");
+        assert!((2.6..3.8).contains(&at(4)), "clean sweep's region: τ {}", at(4));
+        assert!((4.2..5.2).contains(&at(0)), "biased sweep's region: τ {}", at(0));
     }
 }
