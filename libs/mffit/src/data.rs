@@ -284,8 +284,8 @@ impl Dataset {
 ///
 /// A bin's force is the mean of the tyre's force over the bin's slip angles, and the model is
 /// evaluated at their mean: where the curve bends, the two differ by about ½·F''·span²/12
-/// (Jensen). GS2MF's fast sweeps run at 30 °/s, so a 0.1-s bin spans 3° and the bias near the
-/// peak reaches 15–40 N on FY, a bias that leaves no residual (the model follows it) and so
+/// (Jensen). GS2MF's fast sweeps run at 30 °/s, so a 0.1-s bin spans 3°: 35 N off a curve of
+/// 3,000 N peak (the test below), a bias that leaves no residual (the model follows it) and so
 /// hides from every error estimate. At 0.5° it is 36× smaller; slower sweeps (≤ 5 °/s) still
 /// fill whole periods.
 pub const MAX_BIN_SLIP_ANGLE_RAD: f64 = 0.5 * std::f64::consts::PI / 180.0;
