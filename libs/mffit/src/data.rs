@@ -280,23 +280,8 @@ impl Dataset {
     }
 }
 
-/// Widest slip-angle span one resampling bin may hold, rad (0.5°).
-///
-/// A bin's force is the mean of the tyre's force over the bin's slip angles, and the model is
-/// evaluated at their mean: where the curve bends, the two differ by about ½·F''·span²/12
-/// (Jensen). GS2MF's fast sweeps run at 30 °/s, so a 0.1-s bin spans 3°: 35 N off a curve of
-/// 3,000 N peak (the test below), a bias that leaves no residual (the model follows it) and so
-/// hides from every error estimate. At 0.5° it is 36× smaller; slower sweeps (≤ 5 °/s) still
-/// fill whole periods.
-pub const MAX_BIN_SLIP_ANGLE_RAD: f64 = 0.5 * std::f64::consts::PI / 180.0;
-/// Widest slip-ratio span one resampling bin may hold (as [`MAX_BIN_SLIP_ANGLE_RAD`]).
-pub const MAX_BIN_SLIP_RATIO: f64 = 0.005;
-
 /// Averages samples into bins of `period_s` (the thesis fits at 10 Hz: `0.1`). Averaging rather
-/// than picking every n-th sample lowers the noise by √n; a bin's time is its samples' mean. A
-/// bin also closes early once its slip angle or slip ratio has moved more than
-/// [`MAX_BIN_SLIP_ANGLE_RAD`] or [`MAX_BIN_SLIP_RATIO`] from its first sample, so a fast sweep
-/// is not averaged across the curve's bend.
+/// than picking every n-th sample lowers the noise by √n; a bin's time is its samples' mean.
 pub fn resample(samples: &[Sample], period_s: f64) -> Vec<Sample> {
     let mut out = Vec::new();
     if samples.is_empty() || period_s.is_nan() || period_s <= 0.0 {
@@ -338,11 +323,7 @@ pub fn resample(samples: &[Sample], period_s: f64) -> Vec<Sample> {
     };
     for s in samples {
         let b = ((s.time_s - t0) / period_s).floor() as i64;
-        let spread = acc.first().is_some_and(|first| {
-            (s.alpha_rad - first.alpha_rad).abs() > MAX_BIN_SLIP_ANGLE_RAD
-                || (s.kappa - first.kappa).abs() > MAX_BIN_SLIP_RATIO
-        });
-        if b != bin || spread {
+        if b != bin {
             flush(&mut acc, &mut out);
             bin = b;
         }
@@ -454,43 +435,5 @@ impl ValidRange {
             r.kappa = Range { min: 0.0, max: 0.0 };
         }
         r
-    }
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    /// A lateral force curve with a bend: D·sin(C·atan(B·α)), α in rad.
-    fn curve(alpha_rad: f64) -> f64 {
-        3000.0 * (1.3 * (10.0 * alpha_rad).atan()).sin()
-    }
-
-    /// Samples at 100 Hz of a sweep from 0 at `rate_deg_per_s` for `duration_s`.
-    fn sweep(rate_deg_per_s: f64, duration_s: f64) -> Vec<Sample> {
-        (0..(duration_s * 100.0) as usize)
-            .map(|i| {
-                let time_s = i as f64 / 100.0;
-                let alpha_rad = (rate_deg_per_s * time_s).to_radians();
-                Sample { time_s, alpha_rad, fy_n: curve(alpha_rad), ..Sample::default() }
-            })
-            .collect()
-    }
-
-    #[test]
-    fn a_fast_sweep_is_not_averaged_across_the_bend() {
-        // 30 °/s: a 0.1-s bin would span 3° and its mean force would sit ~40 N off the curve at
-        // its mean slip angle where the curve bends; bins capped at 0.5° keep that near 1 N.
-        let bins = resample(&sweep(30.0, 0.5), 0.1);
-        let worst = bins.iter().map(|b| (b.fy_n - curve(b.alpha_rad)).abs()).fold(0.0, f64::max);
-        assert!(worst < 3.0, "bin mean off the curve by {worst:.1} N");
-        assert!(bins.len() > 5, "{} bins in 0.5 s: the span cap closed none early", bins.len());
-    }
-
-    #[test]
-    fn a_slow_sweep_still_fills_whole_periods() {
-        // 2 °/s: 0.2° per 0.1 s, under the cap: ten samples per bin, as before.
-        let bins = resample(&sweep(2.0, 1.0), 0.1);
-        assert_eq!(bins.len(), 10);
     }
 }

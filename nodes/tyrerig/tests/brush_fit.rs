@@ -209,11 +209,7 @@ fn brush_road_gs2mf_fits_the_lateral_stages(seed: &str) {
     // 2.45, 0.23 and 0.23 %; with forward-difference Jacobians the offline fits of the same
     // seeds' `--effects noise` logs give 0.32 and 0.32, 2.25 and 2.37, 0.23 and 0.23 %). With
     // the hold rule switched off (HOLD_COST_LIMIT huge) this test fails, central or forward.
-    // Since resampling bins close after 0.5° of slip angle (`mffit::data::MAX_BIN_SLIP_ANGLE_RAD`),
-    // a point of GS2MF's 30 °/s sweeps averages one or two samples instead of ten, so the
-    // NRMSE on the points carries more of the rig's noise: 0.48 and 0.48, 3.63 and 3.57,
-    // 0.34 and 0.34 % for seeds 1 and 2 (the model against the true tyre moved by ±3 %).
-    for (name, limit) in [("fy_pure", 0.6), ("mz_pure", 4.0), ("mx", 0.6)] {
+    for (name, limit) in [("fy_pure", 0.6), ("mz_pure", 3.0), ("mx", 0.6)] {
         let s = stages.iter().find(|s| s["stage"] == name).unwrap_or_else(|| panic!("{name}: {stderr}"));
         let nrmse = s["nrmse_pct"].as_f64().unwrap_or(f64::NAN);
         assert!(nrmse <= limit, "seed {seed}, {name}: NRMSE {nrmse:.2} % > {limit} %\n{s}");
