@@ -202,7 +202,7 @@ impl FormError {
             q.push(mean[i] * mean[i] - noise_var / count[i] as f64);
             sweep.push(groups[i]);
         }
-        let pooled_var = mean_over_sweeps(&q, &sweep).max(0.0);
+        let pooled_var = mean_over_sweeps(&q, &sweep).0.max(0.0);
         FormError { inputs, q, sweep, pooled_var, axis, fz0_n, noise_var }
     }
 
@@ -261,17 +261,15 @@ impl FormError {
         }
         out
     }
-}
 
-impl FormError {
     /// The region's form-error variance, shrunk toward the stage-wide one: the region's own
     /// estimate (the mean of its sweeps' mean qᵢ) counts as many sweeps as it holds, the
     /// stage-wide one as [`POOLED_WEIGHT_SWEEPS`]. A region one or two sweeps inform says little
     /// on its own — its noise-corrected mean is often 0 beside a region reading several times the
     /// stage's form error — and the data as a whole say how large the form error tends to be.
     fn shrunk_var(&self, q: &[f64], sweep: &[usize]) -> f64 {
-        let sweeps = distinct(sweep) as f64;
-        let own = mean_over_sweeps(q, sweep);
+        let (own, sweeps) = mean_over_sweeps(q, sweep);
+        let sweeps = sweeps as f64;
         ((sweeps * own + POOLED_WEIGHT_SWEEPS * self.pooled_var) / (sweeps + POOLED_WEIGHT_SWEEPS)).max(0.0)
     }
 }
@@ -280,8 +278,8 @@ impl FormError {
 const POOLED_WEIGHT_SWEEPS: f64 = 1.0;
 
 /// The mean over sweeps of each sweep's mean of `q` (each sweep counts once, however many
-/// points it has); 0 when empty.
-fn mean_over_sweeps(q: &[f64], sweep: &[usize]) -> f64 {
+/// points it has), and how many sweeps; (0, 0) when empty.
+fn mean_over_sweeps(q: &[f64], sweep: &[usize]) -> (f64, usize) {
     let mut by: std::collections::BTreeMap<usize, (f64, usize)> = Default::default();
     for (&v, &g) in q.iter().zip(sweep) {
         let e = by.entry(g).or_default();
@@ -289,17 +287,9 @@ fn mean_over_sweeps(q: &[f64], sweep: &[usize]) -> f64 {
         e.1 += 1;
     }
     if by.is_empty() {
-        return 0.0;
+        return (0.0, 0);
     }
-    by.values().map(|(s, n)| s / *n as f64).sum::<f64>() / by.len() as f64
-}
-
-/// How many distinct values `v` holds.
-fn distinct(v: &[usize]) -> usize {
-    let mut v = v.to_vec();
-    v.sort_unstable();
-    v.dedup();
-    v.len()
+    (by.values().map(|(s, n)| s / *n as f64).sum::<f64>() / by.len() as f64, by.len())
 }
 
 /// The form error around one operating point.
