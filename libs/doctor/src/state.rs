@@ -589,6 +589,10 @@ impl Parsed {
             {
                 out.choice.neutral[b] = v;
             } else if let Some(t) = parse_term(effect, &k.to_ascii_uppercase()) {
+                // The form is not written: its terms say it.
+                if t.factor == Factor::Force {
+                    out.choice.form = ThermalForm::ForceLevel;
+                }
                 out.terms.push((t, v));
             }
         }
@@ -656,6 +660,22 @@ mod tests {
             }
         }
         assert_eq!(parse_term(Effect::Thermal, KEY_THERMAL_LAG_S), None);
+    }
+
+    /// The backward check refits a named effect with the choice it was named with, read back
+    /// from its keys: the force-level form is not written as a key, its terms say it.
+    #[test]
+    fn a_written_thermal_effect_reads_back_its_choice() {
+        let choice = Choice { lag_s: 60.0, surface_weight: 0.3, t_ref_c: 52.0, ..Choice::default() };
+        let mut keys = choice.entries(Effect::Thermal);
+        keys.push((term_key(Effect::Thermal, Term { factor: Factor::Force, basis: 1 }), -0.05));
+        let parsed = Parsed::from_entries(Effect::Thermal, keys.iter().map(|(k, v)| (k.as_str(), *v)));
+        assert_eq!(parsed.choice.form, ThermalForm::ForceLevel);
+        assert_eq!((parsed.choice.lag_s, parsed.choice.surface_weight, parsed.choice.t_ref_c), (60.0, 0.3, 52.0));
+        keys.pop();
+        keys.push((term_key(Effect::Thermal, Term { factor: Factor::MuY, basis: 1 }), -0.05));
+        let parsed = Parsed::from_entries(Effect::Thermal, keys.iter().map(|(k, v)| (k.as_str(), *v)));
+        assert_eq!(parsed.choice.form, ThermalForm::Whole);
     }
 
     #[test]

@@ -340,7 +340,7 @@ fn wear_hidden_by_an_outsider_in_relaxing_ttc_runs_is_named_beside_transient_alo
 /// at most 28 %) applied to the forces: `thermal` is named beside `transient` (what the runs as
 /// they are name), and it cuts the held-out FYW RMS in its region by half (measured 93.5 → 43.7
 /// N, −53 %). At the virtual runs' own temperatures this factor stays within 12 % and is undecided
-/// (docs/doctor.md, "TTC-style runs with an outsider's thermal effect").
+/// (docs/doctor.md, "TTC-style runs with an outsider's thermal effect"). Then B (optimum 50 °C).
 #[test]
 fn thermal_hidden_at_real_runs_temperatures_is_named_and_cuts_its_region_by_half() {
     let dir = PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join("doctor_cli").join("relaxing_ttc_real_temperatures");
@@ -366,6 +366,24 @@ fn thermal_hidden_at_real_runs_temperatures_is_named_and_cuts_its_region_by_half
         thermal["rms_after_heldout"].as_f64().unwrap_or(f64::MAX),
     );
     assert!(after <= 0.5 * before, "thermal's region, held-out: {before} -> {after}");
+
+    // B at those temperatures holds the drive/brake run at its 28 % floor; `transient` must
+    // survive the backward check beside it. When that check let the thermal effect refitted
+    // without `transient` choose its temperature afresh, a temperature rising through each sweep
+    // took the relaxation's hysteresis and `transient` was dropped (2.7 % beside it).
+    let hidden: Vec<PathBuf> = clean
+        .iter()
+        .zip(lasers)
+        .map(|(c, to)| {
+            let out = c.with_extension("real_temperatures_b.dat");
+            hide_outsider_thermal(&c.with_extension("dat"), &out, &OutsiderThermal::B, Some(to));
+            out
+        })
+        .collect();
+    let d = doctor_with_fit(&hidden, &dir.join("doctor_b"));
+    let mut names = named(&d);
+    names.sort();
+    assert_eq!(names, ["thermal", "transient"], "named {names:?}; dropped {}", d["dropped"]);
 }
 
 /// An outsider's thermal grip factor of the tread's bulk temperature (the lasers' mean through a
