@@ -93,6 +93,7 @@ pub fn to_json(
         "not_identifiable": dx.not_identifiable,
         "dropped": dx.dropped,
         "ties": dx.ties,
+        "written_model_worse": dx.written_model_worse,
         "backward_check": dx.backward_check.iter().map(|b| json!({
             "effect": b.score.effect.name(),
             "beside": b.beside.iter().map(|e| e.name()).collect::<Vec<_>>(),
@@ -237,10 +238,17 @@ pub fn markdown(
         }
         let _ = writeln!(m);
     }
+    for w in &dx.written_model_worse {
+        let _ = writeln!(m, "- **Warning**: {w}.");
+    }
     for ni in dx.not_identifiable.iter().chain(&dx.dropped).chain(&dx.ties) {
         let _ = writeln!(m, "- {ni}.");
     }
-    if !dx.not_identifiable.is_empty() || !dx.dropped.is_empty() || !dx.ties.is_empty() {
+    if !dx.not_identifiable.is_empty()
+        || !dx.dropped.is_empty()
+        || !dx.ties.is_empty()
+        || !dx.written_model_worse.is_empty()
+    {
         let _ = writeln!(m);
     }
     let _ = writeln!(m, "Search stopped: {}\n", dx.stop_reason);

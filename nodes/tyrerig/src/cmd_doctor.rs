@@ -161,6 +161,9 @@ pub fn run(args: DoctorArgs) -> Result<()> {
             n.rms_after
         );
     }
+    for w in &dx.written_model_worse {
+        println!("warning: {w}");
+    }
     for ni in dx.not_identifiable.iter().chain(&dx.dropped) {
         println!("{ni}");
     }
