@@ -52,7 +52,7 @@ pub struct DoctorConfig {
     pub form_correction: bool,
     /// Family-wise false-naming rate per round: a candidate is named only when the block
     /// bootstrap over sweeps puts its held-out gain above zero with this error rate, shared
-    /// (Bonferroni) among the round's testable candidates.
+    /// among the round's testable candidates by Holm's step-down ([`holm_tests`]).
     pub false_naming_rate: f64,
     /// Bootstrap resamples of the sweeps.
     pub bootstrap_resamples: usize,
@@ -113,6 +113,9 @@ pub struct CandidateScore {
     pub evidence: f64,
     /// Block-bootstrap p-value over sweeps of "the penalised held-out gain is ≤ 0".
     pub p_value: f64,
+    /// The p-value naming needed: the round's false-naming rate over the number of tests
+    /// this candidate shared it with ([`holm_tests`]).
+    pub p_needed: f64,
     /// Held-out χ² reduction per channel.
     pub delta_chi2_by_channel: [f64; 4],
     /// Significant (would be named if best).
@@ -552,6 +555,7 @@ impl Ctx<'_> {
             folds: self.fl.len(),
             evidence: 0.0,
             p_value: 1.0,
+            p_needed: self.cfg.false_naming_rate,
             delta_chi2_by_channel: [0.0; 4],
             significant: false,
             form_corrected: false,
@@ -637,6 +641,7 @@ impl Ctx<'_> {
             folds: self.fl.len(),
             evidence,
             p_value,
+            p_needed: alpha,
             delta_chi2_by_channel: std::array::from_fn(|ch| cb[ch] - ca[ch]),
             significant,
             form_corrected: fe.is_some(),
@@ -817,6 +822,51 @@ const CONFIRM_SHARE: f64 = 0.5;
 /// a held-out DSTWOWHC RMS growing 0.029 → 0.042 mm.
 const HARM_RESOLUTION: [f64; 4] = [2.0, 2.0, 0.2, 0.05e-3];
 
+/// One channel's fit of the logs by two models.
+#[derive(Debug, Clone, Copy, PartialEq)]
+struct ChannelChange {
+    /// Index in [`CHANNELS`].
+    channel: usize,
+    /// χ² before and after.
+    chi2: [f64; 2],
+    /// RMS before and after (SI units).
+    rms: [f64; 2],
+}
+
+impl std::fmt::Display for ChannelChange {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        let ([cb, ca], [rb, ra]) = (self.chi2, self.rms);
+        write!(f, "χ² {cb:.0} → {ca:.0}, RMS {rb:.4} → {ra:.4}")
+    }
+}
+
+/// The doctor's one rule for "fits a channel worse": the channels on which `after` fits `meas`
+/// over `points` worse than `before` does — the χ² grows by more than the share `tolerance`
+/// of itself plus three standard deviations of a χ² of the channel's residual count (a nearly
+/// empty channel scatters by more than a share of itself), and the RMS by more than the
+/// channel's resolution ([`HARM_RESOLUTION`]). Used on held-out sweeps (adding never harms),
+/// on the model as it will be written, and on the final model against the base.
+fn harmed_channels(
+    meas: &[[f64; 4]],
+    before: &[[f64; 4]],
+    after: &[[f64; 4]],
+    sigma: &[f64; 4],
+    points: &[usize],
+    tolerance: f64,
+) -> Vec<ChannelChange> {
+    let (cb, ca) = (chi2(meas, before, sigma, points), chi2(meas, after, sigma, points));
+    (0..CHANNELS.len())
+        .filter_map(|c| {
+            let n = points.iter().filter(|&&k| meas[k][c].is_finite()).count() as f64;
+            let rms = [rms_of(meas, before, c, points), rms_of(meas, after, c, points)];
+            let worse = cb[c] > 0.0
+                && ca[c] - cb[c] > tolerance * cb[c] + 3.0 * (2.0 * n).sqrt()
+                && rms[1] - rms[0] > HARM_RESOLUTION[c];
+            worse.then_some(ChannelChange { channel: c, chi2: [cb[c], ca[c]], rms })
+        })
+        .collect()
+}
+
 /// Fewest points at which a named effect must move its channel's prediction beyond noise: an
 /// effect with no region has nothing to show (benchmark: `transient` named on a TTC plan with
 /// an empty region, its held-out RMS there 0 → 0).
@@ -887,28 +937,10 @@ impl Ctx<'_> {
                 100.0 * self.cfg.min_region_cut
             ));
         }
-        // Adding never harms: every diagnosed channel's held-out χ² no worse than before, beyond
-        // the share `harm_tolerance` and three standard deviations of a χ² of that channel's
-        // residual count (a nearly empty channel scatters by more than a share of itself).
-        let cb = chi2(meas, &before_ho_c, sigma, &self.all);
-        let ca = chi2(meas, &fit.pred_ho, sigma, &self.all);
-        let n_ch: [f64; 4] =
-            std::array::from_fn(|c| self.all.iter().filter(|&&k| meas[k][c].is_finite()).count() as f64);
-        let rms_b: [f64; 4] = std::array::from_fn(|c| rms_of(meas, &before_ho_c, c, &self.all));
-        let rms_a: [f64; 4] = std::array::from_fn(|c| rms_of(meas, &fit.pred_ho, c, &self.all));
-        let harmed = |c: usize| {
-            ca[c] - cb[c] > self.cfg.harm_tolerance * cb[c] + 3.0 * (2.0 * n_ch[c]).sqrt()
-                && rms_a[c] - rms_b[c] > HARM_RESOLUTION[c]
-        };
-        if let Some(worse) = (0..4).find(|&c| cb[c] > 0.0 && harmed(c)) {
-            return Err(format!(
-                "rejected: held-out {} worse with it (χ² {:.0} → {:.0}, RMS {:.4} → {:.4})",
-                CHANNELS[worse],
-                cb[worse],
-                ca[worse],
-                rms_of(meas, &before_ho_c, worse, &self.all),
-                rms_of(meas, &fit.pred_ho, worse, &self.all)
-            ));
+        // Adding never harms: no diagnosed channel worse on held-out sweeps ([`harmed_channels`]).
+        let tolerance = self.cfg.harm_tolerance;
+        if let Some(w) = harmed_channels(meas, &before_ho_c, &fit.pred_ho, sigma, &self.all, tolerance).first() {
+            return Err(format!("rejected: held-out {} worse with it ({w})", CHANNELS[w.channel]));
         }
         // The model as it will be written: the effect applied to the measured state. It must
         // describe the logs no worse than the model before it on any channel (a state fitted
@@ -933,18 +965,10 @@ impl Ctx<'_> {
             Some(f) => (before_fit_c.clone(), add(&applied, &f.all)),
             None => (before_fit_c.clone(), applied),
         };
-        let fb = chi2(meas, &before_w, sigma, &self.all);
-        let fa = chi2(meas, &applied_w, sigma, &self.all);
-        let rms_fb: [f64; 4] = std::array::from_fn(|c| rms_of(meas, &before_w, c, &self.all));
-        let rms_fa: [f64; 4] = std::array::from_fn(|c| rms_of(meas, &applied_w, c, &self.all));
-        if let Some(worse) = (0..4).find(|&c| {
-            fb[c] > 0.0
-                && fa[c] - fb[c] > self.cfg.harm_tolerance * fb[c] + 3.0 * (2.0 * n_ch[c]).sqrt()
-                && rms_fa[c] - rms_fb[c] > HARM_RESOLUTION[c]
-        }) {
+        if let Some(w) = harmed_channels(meas, &before_w, &applied_w, sigma, &self.all, tolerance).first() {
             return Err(format!(
-                "rejected: applied to the measured state it fits {} worse than the model without it (χ² {:.0} → {:.0}, RMS {:.4} → {:.4})",
-                CHANNELS[worse], fb[worse], fa[worse], rms_fb[worse], rms_fa[worse]
+                "rejected: applied to the measured state it fits {} worse than the model without it ({w})",
+                CHANNELS[w.channel]
             ));
         }
         let channels_heldout: [[f64; 2]; 4] = std::array::from_fn(|c| {
@@ -1032,6 +1056,27 @@ impl Ctx<'_> {
             }
         });
         results.into_iter().flatten().collect()
+    }
+
+    /// Scores a round's candidates, each tested at its share of the false-naming rate by
+    /// Holm's step-down ([`holm_tests`]): a candidate whose share is larger than the
+    /// Bonferroni share it was first scored at is scored again at it, where that can change
+    /// whether it is named (its p within the larger share) or what its note says (the
+    /// evidence to be named but not the p).
+    fn score_round(&self, r: &Round, todo: &[Effect], m_tests: usize) -> Vec<Scored> {
+        let mut scored = self.score_all(r, todo, m_tests);
+        let p: Vec<Option<f64>> = scored.iter().map(|(s, _)| s.testable.then_some(s.p_value)).collect();
+        for (i, m) in holm_tests(&p, m_tests, self.cfg.false_naming_rate).into_iter().enumerate() {
+            let s = &scored[i].0;
+            let matters = !s.significant && s.evidence >= self.cfg.min_evidence;
+            if m < m_tests && matters {
+                let corrected = s.form_corrected;
+                scored[i] = self.score(r, s.effect, corrected, m);
+            } else {
+                scored[i].0.p_needed = self.cfg.false_naming_rate / m as f64;
+            }
+        }
+        scored
     }
 
     /// State candidates that explain the data only when scored without the form error: the
@@ -1239,7 +1284,7 @@ impl Ctx<'_> {
     /// candidate of a round is accepted, the two state candidates with the most evidence are
     /// each tried as a first step: added (it must still cut its own region and harm no
     /// channel), the remaining state candidates are scored against it, and a significant one
-    /// that passes the judgement is added with it (its Bonferroni share counts both first
+    /// that passes the judgement is added with it (its share of the rate counts both first
     /// steps). The backward check then asks the first to be significant given the second.
     fn masked_pair(
         &self,
@@ -1274,7 +1319,7 @@ impl Ctx<'_> {
                 .collect();
             let m_tests = n_firsts * todo.iter().filter(|e| untestable_reason(**e, self.ds).is_none()).count();
             let (mut s2, f2): (Vec<CandidateScore>, Vec<Option<CandidateFit>>) =
-                self.score_all(&r2, &todo, m_tests).into_iter().unzip();
+                self.score_round(&r2, &todo, m_tests).into_iter().unzip();
             let mut order: Vec<usize> = (0..s2.len()).filter(|&j| s2[j].significant).collect();
             order.sort_by(|&a, &b| s2[b].evidence.total_cmp(&s2[a].evidence));
             for j in order {
@@ -1407,7 +1452,7 @@ impl Ctx<'_> {
         let Some(last) = search.named.iter().find(|n| n.family == Family::State).map(|n| n.effect) else { return };
         // Significant by the naming rule's statistics: the judgement of that round (its region
         // cut, harm to a channel) may have turned it down in favour of a partner. One effect,
-        // already chosen by the forward search with the round's Bonferroni share, is confirmed
+        // already chosen by the forward search with its share of the round's rate, is confirmed
         // here at the plain rate α: at α/m a strong thermal effect (64 % of the held-out χ²,
         // p = 0.011) was dropped with the specimen effect that had stood beside it (benchmark,
         // MF tyre, TTC plan).
@@ -1555,7 +1600,7 @@ pub fn diagnose(ds: &Dataset, base: &TyreParams, cfg: &DoctorConfig) -> Result<D
         }
         let m_tests = todo.iter().filter(|e| untestable_reason(**e, ds).is_none()).count();
         let (mut scores, fits): (Vec<CandidateScore>, Vec<Option<CandidateFit>>) =
-            ctx.score_all(&round, &todo, m_tests).into_iter().unzip();
+            ctx.score_round(&round, &todo, m_tests).into_iter().unzip();
         let mut order: Vec<usize> = (0..scores.len()).filter(|&i| scores[i].testable).collect();
         order.sort_by(|&a, &b| scores[b].evidence.total_cmp(&scores[a].evidence));
         // Take the significant candidates in order of evidence; the first that passes the
@@ -1604,7 +1649,7 @@ pub fn diagnose(ds: &Dataset, base: &TyreParams, cfg: &DoctorConfig) -> Result<D
         if round.form_error.is_some() {
             not_identifiable = ctx.not_identifiable(&round, &scores, m_tests);
         }
-        not_identifiable.extend(undecided(&scores, m_tests, cfg));
+        not_identifiable.extend(undecided(&scores, cfg));
         stop_reason = no_candidate_reason(&scores, &order, cfg);
         rounds.push(scores);
         break;
@@ -1634,18 +1679,12 @@ pub fn diagnose(ds: &Dataset, base: &TyreParams, cfg: &DoctorConfig) -> Result<D
     // Every addition was judged as written; the backward check's refits were not, and a second
     // specimen under a thermal effect left a written model fitting FX at 55–587 N RMS against
     // the base's 43 N (docs/doctor.md). Said, not hidden.
-    let (base_chi, final_chi) = (chi2(meas, &base_pred, &sigma, &ctx.all), chi2(meas, &cur_fit, &sigma, &ctx.all));
-    let written_model_worse = (0..4)
-        .filter(|&c| {
-            let n = ctx.all.iter().filter(|&&k| meas[k][c].is_finite()).count() as f64;
-            base_chi[c] > 0.0
-                && final_chi[c] - base_chi[c] > cfg.harm_tolerance * base_chi[c] + 3.0 * (2.0 * n).sqrt()
-                && rms.final_fit[c] - rms.base[c] > HARM_RESOLUTION[c]
-        })
-        .map(|c| {
+    let written_model_worse = harmed_channels(meas, &base_pred, &cur_fit, &sigma, &ctx.all, cfg.harm_tolerance)
+        .into_iter()
+        .map(|w| {
             format!(
-                "the extended model fits {} worse than the base on these logs (RMS {:.4} → {:.4}, SI units): its effects could not all be fitted beside the base; do not use it as it is",
-                CHANNELS[c], rms.base[c], rms.final_fit[c]
+                "the extended model fits {} worse than the base on these logs ({w}): its effects could not all be fitted beside the base; do not use it as it is",
+                CHANNELS[w.channel]
             )
         })
         .collect();
@@ -1695,13 +1734,35 @@ fn state_explains_more(scores: &[CandidateScore], ahead: &[usize], bi: usize, cf
     ))
 }
 
+/// Holm's step-down share of the false-naming rate `rate` among a round's `m` tests: for each
+/// candidate (`None`: not testable), the number of tests its p-value is held to, `rate / n`.
+/// The candidate with the k-th smallest p (from 0) is tested at `rate / (m − k)` while every
+/// candidate with a smaller p passed its own test; from the first that fails on, all are held
+/// to that one's share. The family-wise rate stays `rate`, as with Bonferroni's `rate / m` for
+/// all, under any dependence between the tests; but a round whose form-error candidates are
+/// real misfits (a brush tyre's camber misfit, p = 0.0005 on every TTC-style case of the
+/// benchmark) no longer tests its state candidates as if those might be false names.
+fn holm_tests(p: &[Option<f64>], m: usize, rate: f64) -> Vec<usize> {
+    let mut order: Vec<usize> = (0..p.len()).filter(|&i| p[i].is_some()).collect();
+    order.sort_by(|&a, &b| p[a].unwrap_or(1.0).total_cmp(&p[b].unwrap_or(1.0)));
+    let mut share = vec![m.max(1); p.len()];
+    let mut held = None;
+    for (k, &i) in order.iter().enumerate() {
+        let n = held.unwrap_or_else(|| m.saturating_sub(k).max(1));
+        share[i] = n;
+        if held.is_none() && p[i].unwrap_or(1.0) > rate / n as f64 {
+            held = Some(n);
+        }
+    }
+    share
+}
+
 /// State candidates the logs leave undecided: each explains enough of the held-out residual
 /// and improves enough folds, but its gain is too uneven over sweeps to be named at the
 /// round's rate — typically a state the plan varies mostly with the operating point, so that
 /// only a few sweeps (a cell visited again in another state) tell it apart. Said with the test
 /// that would decide it, rather than left as a bare "not significant".
-fn undecided(scores: &[CandidateScore], m_tests: usize, cfg: &DoctorConfig) -> Vec<String> {
-    let alpha = cfg.false_naming_rate / m_tests.max(1) as f64;
+fn undecided(scores: &[CandidateScore], cfg: &DoctorConfig) -> Vec<String> {
     scores
         .iter()
         .filter(|s| {
@@ -1710,19 +1771,20 @@ fn undecided(scores: &[CandidateScore], m_tests: usize, cfg: &DoctorConfig) -> V
                 && matches!(s.effect, Effect::Thermal | Effect::Wear | Effect::BreakIn | Effect::Speed)
                 && s.evidence >= cfg.min_evidence
                 && enough_folds(s.folds_improved, s.folds)
-                && s.p_value > alpha
+                && s.p_value > s.p_needed
         })
         .map(|s| {
             let sp = &s.support;
             format!(
                 "{} undecided from these logs: it explains {:.1} % of the held-out residual and improves {}/{} folds, \
-                 but unevenly over sweeps (bootstrap p = {:.3}, naming needs ≤ {alpha:.4}: {:.0} of held-out χ² gained \
+                 but unevenly over sweeps (bootstrap p = {:.3}, naming needs ≤ {:.4}: {:.0} of held-out χ² gained \
                  over ≈{:.0} sweeps, {:.0} lost on others); {} to decide it",
                 s.effect.name(),
                 100.0 * s.evidence,
                 s.folds_improved,
                 s.folds,
                 s.p_value,
+                s.p_needed,
                 sp.gained_chi2,
                 sp.carrying_sweeps,
                 sp.lost_chi2.abs(),
@@ -1886,6 +1948,7 @@ mod tests {
     }
 
     fn scored(effect: Effect, evidence: f64, folds_improved: usize, p_value: f64, significant: bool) -> CandidateScore {
+        let p_needed = 0.05 / 7.0;
         CandidateScore {
             effect,
             family: effect.family(),
@@ -1898,6 +1961,7 @@ mod tests {
             folds: 4,
             evidence,
             p_value,
+            p_needed,
             delta_chi2_by_channel: [0.0; 4],
             significant,
             form_corrected: true,
@@ -1924,7 +1988,7 @@ mod tests {
             // A form error is no state to revisit.
             scored(Effect::Camber, 0.08, 4, 0.065, false),
         ];
-        let out = undecided(&scores, 7, &cfg);
+        let out = undecided(&scores, &cfg);
         assert_eq!(out.len(), 1, "{out:?}");
         assert!(out[0].starts_with("thermal undecided from these logs: it explains 7.3 %"), "{}", out[0]);
         assert!(out[0].contains("p = 0.065, naming needs ≤ 0.0071"), "{}", out[0]);
@@ -1933,7 +1997,29 @@ mod tests {
             out[0].ends_with("revisit a cell at another temperature (after a thermal pause or a warm-up) to decide it")
         );
         // Significant at the round's rate: nothing undecided.
-        assert!(undecided(&[scored(Effect::Thermal, 0.073, 3, 0.005, false)], 7, &cfg).is_empty());
+        assert!(undecided(&[scored(Effect::Thermal, 0.073, 3, 0.005, false)], &cfg).is_empty());
+    }
+
+    #[test]
+    fn holm_steps_the_rate_down_while_candidates_pass_and_holds_the_rest_at_the_first_failure() {
+        let rate = 0.05;
+        // The brush road tyre's TTC-style wear case, round 1 (p as scored; nine tests): camber
+        // (a real misfit) passes at rate/9, break_in at rate/8, so wear is held to rate/7 =
+        // 0.0071 and its p = 0.0065 passes — at Bonferroni's rate/9 = 0.0056 it did not.
+        let p = [Some(0.0065), Some(0.0415), Some(0.0005), Some(0.0185), Some(0.0035), None, Some(0.3)];
+        let m = holm_tests(&p, 9, rate);
+        assert_eq!(m[2], 9, "smallest p at rate/m");
+        assert_eq!(m[4], 8);
+        assert_eq!(m[0], 7);
+        // offset's p = 0.0185 > rate/6: the step-down stops; it and all after it are held there.
+        assert_eq!(m[3], 6);
+        assert_eq!(m[1], 6);
+        assert_eq!(m[6], 6);
+        // Untestable: the round's own count, not a share.
+        assert_eq!(m[5], 9);
+        // A failure at the smallest p holds every candidate at rate/m: Bonferroni.
+        let m = holm_tests(&[Some(0.01), Some(0.006), Some(0.02)], 3, 0.01);
+        assert_eq!(m, vec![3, 3, 3]);
     }
 
     #[test]

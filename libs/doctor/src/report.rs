@@ -64,6 +64,7 @@ fn score_json(c: &CandidateScore) -> Value {
         "delta_chi2_by_channel": CHANNELS.iter().zip(c.delta_chi2_by_channel).map(|(k, v)| (k.to_string(), json!(v))).collect::<serde_json::Map<_, _>>(),
         "significant": c.significant,
         "p_value": c.p_value,
+        "p_needed": c.p_needed,
         "family": c.family,
         "form_corrected": c.form_corrected,
         "support": c.support,
@@ -319,7 +320,7 @@ pub fn markdown(
         let _ = writeln!(m, "### Round {}\n", r + 1);
         let _ = writeln!(
             m,
-            "| candidate | family | params | evidence | p | folds improved | held-out χ² before → after | note |"
+            "| candidate | family | params | evidence | p (needed) | folds improved | held-out χ² before → after | note |"
         );
         let _ = writeln!(m, "|---|---|---|---|---|---|---|---|");
         let mut sorted: Vec<&CandidateScore> = round.iter().collect();
@@ -340,11 +341,12 @@ pub fn markdown(
             };
             let _ = writeln!(
                 m,
-                "| {} | {fam} | {} | {:.4} | {:.4} | {}/{} | {:.0} → {:.0} | {note} |",
+                "| {} | {fam} | {} | {:.4} | {:.4} ({:.4}) | {}/{} | {:.0} → {:.0} | {note} |",
                 c.effect.name(),
                 c.n_params,
                 c.evidence,
                 c.p_value,
+                c.p_needed,
                 c.folds_improved,
                 c.folds,
                 c.chi2_before_heldout,

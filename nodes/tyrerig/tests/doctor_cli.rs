@@ -346,17 +346,7 @@ fn thermal_hidden_at_real_runs_temperatures_is_named_and_cuts_its_region_by_half
     let dir = PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join("doctor_cli").join("relaxing_ttc_real_temperatures");
     std::fs::create_dir_all(&dir).expect("output dir");
     let clean = relaxing_ttc_runs(&dir);
-    let lasers = [[15.0, 55.0], [55.0, 120.0]];
-    let hidden: Vec<PathBuf> = clean
-        .iter()
-        .zip(lasers)
-        .map(|(c, to)| {
-            let out = c.with_extension("real_temperatures.dat");
-            hide_outsider_thermal(&c.with_extension("dat"), &out, &OutsiderThermal::A, Some(to));
-            out
-        })
-        .collect();
-    let d = doctor_with_fit(&hidden, &dir.join("doctor"));
+    let d = diagnose_at_real_temperatures(&clean, &dir, &OutsiderThermal::A, "a");
     let mut names = named(&d);
     names.sort();
     assert_eq!(names, ["thermal", "transient"], "named {names:?}; {}", d["stop_reason"]);
@@ -371,16 +361,7 @@ fn thermal_hidden_at_real_runs_temperatures_is_named_and_cuts_its_region_by_half
     // survive the backward check beside it. When that check let the thermal effect refitted
     // without `transient` choose its temperature afresh, a temperature rising through each sweep
     // took the relaxation's hysteresis and `transient` was dropped (2.7 % beside it).
-    let hidden: Vec<PathBuf> = clean
-        .iter()
-        .zip(lasers)
-        .map(|(c, to)| {
-            let out = c.with_extension("real_temperatures_b.dat");
-            hide_outsider_thermal(&c.with_extension("dat"), &out, &OutsiderThermal::B, Some(to));
-            out
-        })
-        .collect();
-    let d = doctor_with_fit(&hidden, &dir.join("doctor_b"));
+    let d = diagnose_at_real_temperatures(&clean, &dir, &OutsiderThermal::B, "b");
     let mut names = named(&d);
     names.sort();
     assert_eq!(names, ["thermal", "transient"], "named {names:?}; dropped {}", d["dropped"]);
@@ -388,16 +369,7 @@ fn thermal_hidden_at_real_runs_temperatures_is_named_and_cuts_its_region_by_half
     // C (symmetric): the model as written must fit the logs better than the base. When an
     // effect fitted with its operating-point share taken out was exempt from the written-model
     // rule, its model fitted FYW at 199–239 N RMS against the base's 80 N.
-    let hidden: Vec<PathBuf> = clean
-        .iter()
-        .zip(lasers)
-        .map(|(c, to)| {
-            let out = c.with_extension("real_temperatures_c.dat");
-            hide_outsider_thermal(&c.with_extension("dat"), &out, &OutsiderThermal::C, Some(to));
-            out
-        })
-        .collect();
-    let d = doctor_with_fit(&hidden, &dir.join("doctor_c"));
+    let d = diagnose_at_real_temperatures(&clean, &dir, &OutsiderThermal::C, "c");
     let mut names = named(&d);
     names.sort();
     assert_eq!(names, ["thermal", "transient"], "named {names:?}; dropped {}", d["dropped"]);
@@ -406,6 +378,28 @@ fn thermal_hidden_at_real_runs_temperatures_is_named_and_cuts_its_region_by_half
         assert!(written < base, "{ch}: the written model {written:?} against the base {base:?}");
     }
     assert_eq!(d["written_model_worse"], serde_json::json!([]), "{}", d["written_model_worse"]);
+}
+
+/// The relaxing runs `clean` (cornering, drive/brake) with their tread lasers mapped to the
+/// ranges real runs read (15–55 °C cornering, 55–120 °C drive/brake) and `form` hidden in their
+/// forces, written beside them as `*.real_temperatures_<tag>.dat` and diagnosed with a fit.
+fn diagnose_at_real_temperatures(
+    clean: &[PathBuf],
+    dir: &std::path::Path,
+    form: &OutsiderThermal,
+    tag: &str,
+) -> serde_json::Value {
+    let lasers = [[15.0, 55.0], [55.0, 120.0]];
+    let hidden: Vec<PathBuf> = clean
+        .iter()
+        .zip(lasers)
+        .map(|(c, to)| {
+            let out = c.with_extension(format!("real_temperatures_{tag}.dat"));
+            hide_outsider_thermal(&c.with_extension("dat"), &out, form, Some(to));
+            out
+        })
+        .collect();
+    doctor_with_fit(&hidden, &dir.join(format!("doctor_{tag}")))
 }
 
 /// An outsider's thermal grip factor of the tread's bulk temperature (the lasers' mean through a
