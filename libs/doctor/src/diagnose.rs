@@ -687,7 +687,18 @@ impl Ctx<'_> {
         eff: Effect,
         fe: Option<&FormError>,
     ) -> Option<(CandidateFit, usize)> {
-        self.fit_state_as(model, lin, eff, fe, None)
+        let whole = self.fit_state_as(model, lin, eff, fe, None);
+        // A reduced form the data may tell apart from what the model holds when the whole one
+        // cannot ([`state::StateForm`]): the one of the two that predicts held-out sweeps better.
+        let Some(form) = state::StateForm::held_out_alternative(eff) else { return whole };
+        let reduced_choice =
+            self.ev.choice_grid(eff, self.cfg.form_correction).into_iter().next().map(|c| Choice { form, ..c });
+        let reduced = reduced_choice.and_then(|c| self.fit_state_as(model, lin, eff, fe, Some(c)));
+        let heldout_chi2 = |f: &(CandidateFit, usize)| total(chi2(&self.meas, &f.0.pred_ho, &self.sigma, &self.all));
+        match (whole, reduced) {
+            (Some(w), Some(r)) if heldout_chi2(&r) < heldout_chi2(&w) => Some(r),
+            (w, r) => w.or(r),
+        }
     }
 
     /// [`Ctx::fit_state`] with the discrete choice (thermal's source, lag, surface share and
