@@ -283,6 +283,8 @@ impl Choice {
         match effect {
             Effect::Thermal => 4,
             Effect::BreakIn => 2,
+            // Its form, whole tyre or radius alone ([`StateForm::held_out_alternative`]).
+            Effect::Wear => 1,
             _ => 0,
         }
     }
