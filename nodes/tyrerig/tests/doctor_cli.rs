@@ -104,9 +104,7 @@ fn thermal_is_named_on_brush(rig: &str, out: &str) {
     assert_eq!(d["form_correction"].as_bool(), Some(true), "--fit scores state effects against the form error");
     let names = named(&d);
     assert_eq!(names.first().map(String::as_str), Some("thermal"), "named {names:?}; {}", d["stop_reason"]);
-    let e = &d["effects"][0];
-    let (before, after) =
-        (e["rms_before_heldout"].as_f64().unwrap_or(0.0), e["rms_after_heldout"].as_f64().unwrap_or(1.0));
+    let (before, after) = region_rms(&d, "thermal");
     assert!(after <= 0.5 * before, "held-out RMS in the thermal region {before} → {after}: less than a 50 % cut");
 }
 
@@ -192,6 +190,13 @@ fn bench_case(id: &str, work: &str) -> (Vec<String>, serde_json::Value) {
     assert!(case["error"].is_null(), "{}", case["error"]);
     let names = case["named"].as_array().expect("named").iter().filter_map(|v| v.as_str().map(str::to_owned)).collect();
     (names, case["form_errors"].clone())
+}
+
+/// A named effect's held-out RMS in its own region, before and after it was added (`doctor.json`
+/// `effects[i]`); panics when `effect` was not named.
+fn region_rms(d: &serde_json::Value, effect: &str) -> (f64, f64) {
+    let e = d["effects"].as_array().expect("effects").iter().find(|e| e["effect"] == effect).expect(effect);
+    (e["rms_before_heldout"].as_f64().unwrap_or(0.0), e["rms_after_heldout"].as_f64().unwrap_or(f64::MAX))
 }
 
 /// Runs the built `tyrerig` with `args`; panics with its stderr when it fails.
@@ -290,11 +295,7 @@ fn thermal_hidden_in_relaxing_ttc_runs_is_named_beside_transient() {
     let mut names = named(&d);
     names.sort();
     assert_eq!(names, ["thermal", "transient"], "named {names:?}; {}", d["stop_reason"]);
-    let thermal = d["effects"].as_array().expect("effects").iter().find(|e| e["effect"] == "thermal").expect("thermal");
-    let (before, after) = (
-        thermal["rms_before_heldout"].as_f64().unwrap_or(0.0),
-        thermal["rms_after_heldout"].as_f64().unwrap_or(f64::MAX),
-    );
+    let (before, after) = region_rms(&d, "thermal");
     assert!(after < 0.5 * before, "thermal's region, held-out: {before} -> {after}");
     // Its score says which sweeps carry it: named sweeps of these runs, gaining on net.
     let scored = d["rounds"]
@@ -363,11 +364,7 @@ fn thermal_hidden_at_real_runs_temperatures_is_named_and_cuts_its_region_by_half
     let mut names = named(&d);
     names.sort();
     assert_eq!(names, ["thermal", "transient"], "named {names:?}; {}", d["stop_reason"]);
-    let thermal = d["effects"].as_array().expect("effects").iter().find(|e| e["effect"] == "thermal").expect("thermal");
-    let (before, after) = (
-        thermal["rms_before_heldout"].as_f64().unwrap_or(0.0),
-        thermal["rms_after_heldout"].as_f64().unwrap_or(f64::MAX),
-    );
+    let (before, after) = region_rms(&d, "thermal");
     assert!(after <= 0.5 * before, "thermal's region, held-out: {before} -> {after}");
 
     // B at those temperatures holds the drive/brake run at its 28 % floor; `transient` must
