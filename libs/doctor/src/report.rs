@@ -90,6 +90,10 @@ pub fn to_json(
         "sweeps": dx.sweeps,
         "noise_floor": per_ch(dx.rms.noise),
         "named_effects": dx.state_effects().map(|n| n.effect.name()).collect::<Vec<_>>(),
+        "indistinct_effects": dx.indistinct_effects().map(|n| json!({
+            "in_model": n.effect.name(),
+            "or": n.indistinct_from.map(|e| e.name()),
+        })).collect::<Vec<_>>(),
         "form_errors": dx.form_errors().map(|n| n.effect.name()).collect::<Vec<_>>(),
         "not_identifiable": dx.not_identifiable,
         "dropped": dx.dropped,
@@ -225,6 +229,16 @@ pub fn markdown(
     } else {
         let _ = writeln!(m, "Missing effects of the tyre's state, in the order added:\n");
         for (i, n) in dx.state_effects().enumerate() {
+            line(&mut m, i, n);
+        }
+        let _ = writeln!(m);
+    }
+    if dx.indistinct_effects().next().is_some() {
+        let _ = writeln!(
+            m,
+            "A state effect in the logs that they cannot name (held in the model for its prediction; why, below):\n"
+        );
+        for (i, n) in dx.indistinct_effects().enumerate() {
             line(&mut m, i, n);
         }
         let _ = writeln!(m);

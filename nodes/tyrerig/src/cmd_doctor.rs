@@ -143,9 +143,10 @@ pub fn run(args: DoctorArgs) -> Result<()> {
         println!("no missing effect of the tyre's state named: {}", dx.stop_reason);
     }
     for (i, n) in dx.named.iter().enumerate() {
-        let family = match n.family {
-            doctor::Family::State => "state effect",
-            doctor::Family::FormError => "form error",
+        let family = match (n.family, n.indistinct_from) {
+            (doctor::Family::State, None) => "state effect".to_owned(),
+            (doctor::Family::State, Some(other)) => format!("state effect, not told from {}: not named", other.name()),
+            (doctor::Family::FormError, _) => "form error".to_owned(),
         };
         println!(
             "{}. {} [{family}] (evidence {:.3}, p {:.4}; runner-up {}): {} RMS in its region {:.4} → {:.4} held-out, {:.4} → {:.4} fit",
