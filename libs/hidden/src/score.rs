@@ -19,6 +19,10 @@ pub const RECALL_MIN_STRENGTH: f64 = 3.0;
 pub const NOTHING: &str = "(nothing)";
 /// The confusion table's row for cases with nothing injected.
 pub const CLEAN: &str = "clean";
+/// The confusion table's column for a state effect the doctor held in its model but could not
+/// tell from another candidate (`indistinct_effects` of doctor.json): neither a name nor
+/// nothing.
+pub const NOT_TOLD_APART: &str = "(not told apart)";
 
 /// One injected effect as the score sees it.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
@@ -66,6 +70,10 @@ pub struct CaseRecord {
     pub named_detail: Vec<NamedEffect>,
     /// `form_errors` of doctor.json (operating-point misfits; not effect names).
     pub form_errors: Vec<String>,
+    /// `indistinct_effects` of doctor.json: each state effect held in the model and the one
+    /// the logs could not tell it from (not names).
+    #[serde(default)]
+    pub indistinct: Vec<[String; 2]>,
     /// The whole case's wall time (injection, export, doctor) [s].
     pub wall_time_s: f64,
     /// The doctor's own wall time (`wall_time_s` of doctor.json) [s].
@@ -144,7 +152,13 @@ impl Score {
             } else {
                 r.truth.iter().map(|t| t.kind.name().to_owned()).collect()
             };
-            let cols: Vec<String> = if r.named.is_empty() { vec![NOTHING.to_owned()] } else { r.named.clone() };
+            let mut cols: Vec<String> = r.named.clone();
+            if !r.indistinct.is_empty() {
+                cols.push(NOT_TOLD_APART.to_owned());
+            }
+            if cols.is_empty() {
+                cols.push(NOTHING.to_owned());
+            }
             for row in &rows {
                 for col in &cols {
                     *s.confusion.entry(row.clone()).or_default().entry(col.clone()).or_default() += 1;
@@ -210,7 +224,7 @@ impl Score {
         }
         cols.push(NOTHING.to_owned());
         let mut out = String::new();
-        let w = 11;
+        let w = cols.iter().map(|c| c.chars().count() + 2).max().unwrap_or(0).max(11);
         let _ = writeln!(out, "confusion (rows: injected; columns: named; a case counts once per pair)");
         let _ = write!(out, "{:<12}", "");
         for c in &cols {
@@ -298,6 +312,7 @@ mod tests {
                 .map(|&(e, b, a)| NamedEffect { effect: e.into(), rms_before_heldout: b, rms_after_heldout: a })
                 .collect(),
             form_errors: vec!["load".into()],
+            indistinct: Vec::new(),
             wall_time_s: 10.0,
             doctor_wall_time_s: 8.0,
             error: None,
@@ -321,12 +336,17 @@ mod tests {
             // wear + break-in, both strong; wear found (cut 50 %) and a false transient
             case(&[(Wear, 6.0), (BreakIn, 3.0)], &[("wear", 2.0, 1.0), ("transient", 5.0, 4.0)]),
         ];
+        // break-in strong, held in the model as thermal but not told apart from break_in:
+        // neither a false thermal nor a found break-in
+        let mut apart = case(&[(BreakIn, 7.0)], &[]);
+        apart.indistinct = vec![["thermal".into(), "break_in".into()]];
+        records.push(apart);
         let mut broken = case(&[(Wear, 9.0)], &[]);
         broken.error = Some("doctor failed".into());
         broken.wall_time_s = 30.0;
         records.push(broken);
         let s = Score::of(&records);
-        assert_eq!((s.cases, s.errors), (6, 1));
+        assert_eq!((s.cases, s.errors), (7, 1));
         assert_eq!((s.clean_cases, s.clean_nothing_named), (2, 1));
         assert!((s.clean_share() - 0.5).abs() < 1e-12);
 
@@ -341,7 +361,7 @@ mod tests {
         assert_eq!((wear.true_names, wear.false_names, wear.strong_found, wear.strong_cases), (1, 1, 1, 1));
         assert!((wear.cut_median - 0.5).abs() < 1e-12);
         let bi = &s.per_name["break_in"];
-        assert_eq!((bi.strong_found, bi.strong_cases), (0, 1));
+        assert_eq!((bi.strong_found, bi.strong_cases), (0, 2));
         assert!(bi.precision.is_nan(), "never named: no precision");
         let tr = &s.per_name["transient"];
         assert_eq!((tr.true_names, tr.false_names), (0, 1));
@@ -358,13 +378,16 @@ mod tests {
         assert_eq!(c["wear"]["transient"], 1);
         assert_eq!(c["break_in"]["wear"], 1);
         assert_eq!(c["break_in"]["transient"], 1);
+        assert_eq!(c["break_in"][NOT_TOLD_APART], 1);
+        assert!(!c["break_in"].contains_key(NOTHING), "not told apart is not nothing");
         assert!(!c.contains_key("wear") || !c["wear"].contains_key(NOTHING), "the failed case is left out");
 
-        // Wall times include the failed case: 6 × 10 s and 30 s.
+        // Wall times include the failed case: 7 × 10 s and 30 s.
         assert_eq!(s.wall_median_s, 10.0);
         assert_eq!(s.wall_max_s, 30.0);
-        assert_eq!(s.wall_total_s, 90.0);
+        assert_eq!(s.wall_total_s, 100.0);
         let text = s.render();
+        assert!(text.contains(NOT_TOLD_APART), "{text}");
         assert!(text.contains("clean cases with nothing named: 1/2 (50 %)"), "{text}");
     }
 }

@@ -68,9 +68,10 @@ pub fn run(args: &DoctorBench) -> Result<()> {
         match &r.error {
             Some(e) => eprintln!("  error: {e}"),
             None => eprintln!(
-                "  named [{}] (form errors [{}]); truth [{}]; {:.1} s (doctor {:.1} s)",
+                "  named [{}] (form errors [{}]{}); truth [{}]; {:.1} s (doctor {:.1} s)",
                 r.named.join(", "),
                 r.form_errors.join(", "),
+                r.indistinct.iter().map(|[a, b]| format!("; not told apart: {a} or {b}")).collect::<String>(),
                 r.truth
                     .iter()
                     .map(|t| format!("{} {:.1} σ", t.kind, t.strength_noise_units))
@@ -106,6 +107,7 @@ fn run_case(args: &DoctorBench, case: &Case, clean_dir: &Path) -> CaseRecord {
         named: Vec::new(),
         named_detail: Vec::new(),
         form_errors: Vec::new(),
+        indistinct: Vec::new(),
         wall_time_s: 0.0,
         doctor_wall_time_s: f64::NAN,
         error: None,
@@ -149,6 +151,7 @@ fn diagnose_case(args: &DoctorBench, case: &Case, clean: &[PathBuf], record: &mu
     record.named = verdict.named;
     record.named_detail = verdict.named_detail;
     record.form_errors = verdict.form_errors;
+    record.indistinct = verdict.indistinct;
     record.doctor_wall_time_s = verdict.wall_time_s;
     Ok(())
 }

@@ -168,9 +168,33 @@ fn thermal_and_wear_hidden_together_in_ttc_runs_are_both_named() {
     assert_eq!(names, ["thermal", "wear"], "named {names:?}, form errors {form_errors}");
 }
 
+/// The project's free-rolling plan on the MF tyre with a break-in hidden (a two-stage recovery
+/// whose slow stage outlasts the test) against the tyre's own model: the tread heats while the
+/// tyre breaks in, and `thermal` explains what `break_in` does (each beside the other adds less
+/// than the 5 % that counts as evidence). Nothing is named; the pair is reported as not told
+/// apart. (Decided head to head, `thermal` was named for it.)
+#[test]
+fn a_break_in_the_logs_cannot_tell_from_thermal_names_neither() {
+    let case = bench_case_json("mf/gs2mf_fr/break_in/s1", "bench_fr_break_in_mf");
+    assert_eq!(case["named"], serde_json::json!([]), "{case}");
+    let pair = case["indistinct"].as_array().and_then(|a| a.first()).cloned().unwrap_or_default();
+    let mut pair: Vec<&str> =
+        pair.as_array().map(|p| p.iter().filter_map(|v| v.as_str()).collect()).unwrap_or_default();
+    pair.sort_unstable();
+    assert_eq!(pair, ["break_in", "thermal"], "{case}");
+}
+
 /// Runs one case of `tyrerig bench doctor` in its own work directory; the state effects the
 /// doctor named and its form errors.
 fn bench_case(id: &str, work: &str) -> (Vec<String>, serde_json::Value) {
+    let case = bench_case_json(id, work);
+    let names = case["named"].as_array().expect("named").iter().filter_map(|v| v.as_str().map(str::to_owned)).collect();
+    (names, case["form_errors"].clone())
+}
+
+/// Runs one case of `tyrerig bench doctor` in its own work directory; its record in the
+/// benchmark's JSON.
+fn bench_case_json(id: &str, work: &str) -> serde_json::Value {
     let dir = PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join("doctor_cli").join(work);
     let json = dir.join("bench.json");
     // The benchmark reads its rig configs and procedures from launch-config/ in the repository.
@@ -185,11 +209,10 @@ fn bench_case(id: &str, work: &str) -> (Vec<String>, serde_json::Value) {
         .expect("run tyrerig");
     assert!(o.status.success(), "tyrerig bench doctor: {}", String::from_utf8_lossy(&o.stderr));
     let d: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(&json).expect("bench json")).unwrap();
-    let case = &d["cases"][0];
+    let case = d["cases"][0].clone();
     assert_eq!(case["case"].as_str(), Some(id));
     assert!(case["error"].is_null(), "{}", case["error"]);
-    let names = case["named"].as_array().expect("named").iter().filter_map(|v| v.as_str().map(str::to_owned)).collect();
-    (names, case["form_errors"].clone())
+    case
 }
 
 /// A named effect's held-out RMS in its own region, before and after it was added (`doctor.json`

@@ -106,6 +106,8 @@ pub struct Verdict {
     pub named: Vec<String>,
     pub named_detail: Vec<NamedEffect>,
     pub form_errors: Vec<String>,
+    /// Each state effect in the model and the one it was not told apart from.
+    pub indistinct: Vec<[String; 2]>,
     pub wall_time_s: f64,
 }
 
@@ -164,10 +166,20 @@ fn read_verdict(path: &Path) -> Result<Verdict> {
                 .collect()
         })
         .unwrap_or_default();
+    let indistinct = v
+        .get("indistinct_effects")
+        .and_then(|a| a.as_array())
+        .map(|a| {
+            a.iter()
+                .filter_map(|e| Some([e.get("in_model")?.as_str()?.to_owned(), e.get("or")?.as_str()?.to_owned()]))
+                .collect()
+        })
+        .unwrap_or_default();
     Ok(Verdict {
         named,
         named_detail,
         form_errors: strings("form_errors"),
+        indistinct,
         wall_time_s: v.get("wall_time_s").and_then(|x| x.as_f64()).unwrap_or(f64::NAN),
     })
 }
