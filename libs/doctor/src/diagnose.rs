@@ -267,6 +267,13 @@ pub struct NamedEffect {
     pub indistinct_from: Option<Effect>,
 }
 
+impl NamedEffect {
+    /// How much less its main channel's held-out RMS in its region is with it [%].
+    pub fn region_cut_pct(&self) -> f64 {
+        100.0 * (1.0 - self.rms_after_heldout / self.rms_before_heldout.max(1e-30))
+    }
+}
+
 /// One bin of the region search.
 #[derive(Debug, Clone, Serialize)]
 pub struct RegionBin {
@@ -830,7 +837,7 @@ impl Ctx<'_> {
 /// What to do about a state effect the logs could not tell from another, in words.
 fn indistinct_advice(n: &NamedEffect) -> Option<String> {
     let other = n.indistinct_from?;
-    let cut = 100.0 * (1.0 - n.rms_after_heldout / n.rms_before_heldout.max(1e-30));
+    let cut = n.region_cut_pct();
     let states = [n.effect, other];
     let revisit = if states.contains(&Effect::Thermal) && states.contains(&Effect::BreakIn) {
         "the tyre was cold only while it was new: revisit an early cell cold after the break-in (after a long pause)"

@@ -2,7 +2,7 @@
 
 use crate::DoctorError;
 use crate::data::Dataset;
-use crate::diagnose::{CandidateScore, Diagnosis};
+use crate::diagnose::{CandidateScore, Diagnosis, NamedEffect};
 use crate::effects::{CH_FX, CH_FY, CH_MZ, CH_RL, CHANNELS, EffectParams};
 use crate::extension::extended_params;
 use mftyre::TyreParams;
@@ -208,7 +208,7 @@ pub fn markdown(
     let _ = writeln!(m, "- Base model: `{base_name}`");
     let _ = writeln!(m, "- Data: {} points in {} sweeps; wall time {:.1} s\n", dx.points, dx.sweeps, wall_time_s);
     let _ = writeln!(m, "## Verdict\n");
-    let line = |m: &mut String, i: usize, n: &crate::diagnose::NamedEffect| {
+    let line = |m: &mut String, i: usize, n: &NamedEffect| {
         let ch = ch_index(&n.channel);
         let ru = n.runner_up.map_or("none".to_owned(), |(e, v)| format!("{} ({:.3})", e.name(), v));
         let _ = writeln!(
@@ -221,7 +221,7 @@ pub fn markdown(
             n.channel,
             fmt_rms(n.rms_before_heldout, ch),
             fmt_rms(n.rms_after_heldout, ch),
-            100.0 * (1.0 - n.rms_after_heldout / n.rms_before_heldout.max(1e-30))
+            n.region_cut_pct()
         );
     };
     if dx.state_effects().next().is_none() {
@@ -233,26 +233,27 @@ pub fn markdown(
         }
         let _ = writeln!(m);
     }
-    if dx.indistinct_effects().next().is_some() {
-        let _ = writeln!(
-            m,
-            "A state effect in the logs that they cannot name (held in the model for its prediction; why, below):\n"
-        );
-        for (i, n) in dx.indistinct_effects().enumerate() {
-            line(&mut m, i, n);
+    // A heading and its numbered effects, when there are any.
+    let list = |m: &mut String, heading: &str, effects: Vec<&NamedEffect>| {
+        if effects.is_empty() {
+            return;
+        }
+        let _ = writeln!(m, "{heading}\n");
+        for (i, n) in effects.into_iter().enumerate() {
+            line(m, i, n);
         }
         let _ = writeln!(m);
-    }
-    if dx.form_errors().next().is_some() {
-        let _ = writeln!(
-            m,
-            "The model's form error (operating-point misfits MF-Tyre 6.1's own coefficients mend; not effects of the tyre's state):\n"
-        );
-        for (i, n) in dx.form_errors().enumerate() {
-            line(&mut m, i, n);
-        }
-        let _ = writeln!(m);
-    }
+    };
+    list(
+        &mut m,
+        "A state effect in the logs that they cannot name (held in the model for its prediction; why, below):",
+        dx.indistinct_effects().collect(),
+    );
+    list(
+        &mut m,
+        "The model's form error (operating-point misfits MF-Tyre 6.1's own coefficients mend; not effects of the tyre's state):",
+        dx.form_errors().collect(),
+    );
     for w in &dx.written_model_worse {
         let _ = writeln!(m, "- **Warning**: {w}.");
     }
