@@ -184,6 +184,18 @@ fn a_break_in_the_logs_cannot_tell_from_thermal_names_neither() {
     assert_eq!(pair, ["break_in", "thermal"], "{case}");
 }
 
+/// Issue 30: thermal and wear hidden together in a free-rolling GS2MF run of the MF tyre (the
+/// benchmark's case `mf/gs2mf_fr/thermal+wear/s1`, 6.2 σ and 8.0 σ): both are named, and no
+/// third. `break_in` was named third on what the two left (evidence 0.062) while it cut the
+/// held-out RMS in its own region by 11 % only (472 → 420 N); a state effect is now named only
+/// if it cuts its region by 20 %.
+#[test]
+fn thermal_and_wear_on_a_free_rolling_run_are_named_without_a_third() {
+    let (mut names, form_errors) = bench_case("mf/gs2mf_fr/thermal+wear/s1", "bench_fr_thermal_wear");
+    names.sort();
+    assert_eq!(names, ["thermal", "wear"], "named {names:?}, form errors {form_errors}");
+}
+
 /// Runs one case of `tyrerig bench doctor` in its own work directory; the state effects the
 /// doctor named and its form errors.
 fn bench_case(id: &str, work: &str) -> (Vec<String>, serde_json::Value) {
