@@ -26,7 +26,12 @@ pub enum Channel {
     Fy0,
     /// Pure longitudinal force Fx0 (cheap path, α ignored).
     Fx0,
-    /// Pure aligning moment Mz0 (full model, pure-slip mode).
+    /// Aligning moment at pure side slip: the whole model (combined-slip mode) at κ = 0, as
+    /// MFeval and the rig evaluate it. That is Mz0 + s·Fx(κ = 0), not Mz0 alone: a tyre that
+    /// carries a force at zero slip ratio (SVx, SHx) has its arm's moment in every free-rolling
+    /// sample, and fitting Mz0 alone to those samples let its coefficients absorb the term,
+    /// which the written model's evaluation then added again (the virtual rig's MF tyre at
+    /// 2·Fz0: −4.8 to −9.8 N·m at α −1…2°).
     Mz0,
     /// Combined-slip Fx.
     Fx,
@@ -66,7 +71,7 @@ impl Channel {
         match self {
             Channel::Fy0 => mftyre::pure_fy(params, UseMode::M211, input),
             Channel::Fx0 => mftyre::pure_fx(params, UseMode::M211, input),
-            Channel::Mz0 => mftyre::evaluate(params, UseMode::M212, input).mz_nm,
+            Channel::Mz0 => mftyre::evaluate(params, UseMode::M211, &MfInput { kappa: 0.0, ..*input }).mz_nm,
             Channel::Mx => mftyre::evaluate(params, UseMode::M212, input).mx_nm,
             Channel::Fx => mftyre::evaluate(params, UseMode::M211, input).fx_n,
             Channel::Fy => mftyre::evaluate(params, UseMode::M211, input).fy_n,
@@ -100,7 +105,11 @@ impl Channel {
                 return;
             }
             // The batch kernel computes only the terms each channel's column needs.
-            Channel::Mz0 => column(UseMode::M212, BatchColumn::MzNm, values),
+            Channel::Mz0 => {
+                scratch.zeros.resize(inputs.fz_n.len(), 0.0);
+                let at_zero_kappa = BatchInput { kappa: &scratch.zeros, ..*inputs };
+                let _ = mftyre::evaluate_column(params, UseMode::M211, &at_zero_kappa, BatchColumn::MzNm, values);
+            }
             Channel::Mx => column(UseMode::M212, BatchColumn::MxNm, values),
             Channel::Fx => column(UseMode::M211, BatchColumn::FxN, values),
             Channel::Fy => column(UseMode::M211, BatchColumn::FyN, values),
@@ -129,6 +138,8 @@ impl Channel {
 #[derive(Debug, Default)]
 pub struct BatchScratch {
     values: Vec<f64>,
+    /// A column of zeros (κ for [`Channel::Mz0`]).
+    zeros: Vec<f64>,
 }
 
 /// Points' inputs as columns, the batch kernel's struct-of-arrays layout.
@@ -200,7 +211,7 @@ impl Channel {
         match self {
             Channel::Fy0 => tyre(UseMode::M211, &pure(0.0, input.alpha_rad)).fy_n,
             Channel::Fx0 => tyre(UseMode::M211, &pure(input.kappa, 0.0)).fx_n,
-            Channel::Mz0 => tyre(UseMode::M212, input).mz_nm,
+            Channel::Mz0 => tyre(UseMode::M211, &pure(0.0, input.alpha_rad)).mz_nm,
             Channel::Mx => tyre(UseMode::M212, input).mx_nm,
             Channel::Fx => tyre(UseMode::M211, input).fx_n,
             Channel::Fy => tyre(UseMode::M211, input).fy_n,

@@ -661,6 +661,7 @@ pub fn fit(data: &Dataset, opts: &FitOptions) -> Result<FitResult, FitError> {
         rep.wall_s = t.elapsed().as_secs_f64();
         stages.push(rep);
     }
+    mz_pure::refit_after_arm(&ctx, &mut params, &mut stages, &stage_data);
     note_refined_later(&mut stages, &params);
     let mut my = StageReport::new("my", "MY");
     my.skipped = Some(

@@ -14,7 +14,8 @@ use crate::stages::fx_combined::combined_points;
 use crate::stages::steps::{decide_keys, finish, run_steps};
 use crate::stages::{Stage, StageReport};
 
-const KEYS: [&str; 4] = ["SSZ1", "SSZ2", "SSZ3", "SSZ4"];
+/// The arm s of the combined moment (SSZ1–4), this stage's own keys.
+pub(crate) const KEYS: [&str; 4] = ["SSZ1", "SSZ2", "SSZ3", "SSZ4"];
 /// Pure-MZ keys the combined sweeps identify when no cornering sweeps fitted them: the trail's
 /// size with its load term, its stiffness, the residual torque and the offset. The trail's
 /// shape (C, E) needs a slip-angle sweep.

@@ -36,7 +36,7 @@ use crate::stages::{Stage, StageReport};
 pub const JOINT: [&str; 12] =
     ["QDZ1", "QDZ2", "QBZ1", "QCZ1", "QEZ1", "QHZ1", "QDZ6", "QDZ7", "QBZ10", "QDZ3", "QDZ8", "QHZ3"];
 /// The arm's keys (`mz_combined`'s own).
-const ARM: [&str; 4] = ["SSZ1", "SSZ2", "SSZ3", "SSZ4"];
+const ARM: [&str; 4] = crate::stages::mz_combined::KEYS;
 /// Largest MZ pure NRMSE after the refinement, as a multiple of before it: the pure points are
 /// `mz_pure`'s least-squares optimum, so a small move costs them little; more than this and
 /// the two runs disagree (temperature, wear), which the pure fit should not pay for.
