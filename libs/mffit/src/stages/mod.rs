@@ -549,6 +549,8 @@ pub fn fit(data: &Dataset, opts: &FitOptions) -> Result<FitResult, FitError> {
         .warm_start
         .as_ref()
         .is_some_and(|w| w.nominal == [nominal.v0_mps, nominal.p0_pa, nominal.fz0_n, nominal.r0_m]);
+    // The model as each stage left it: a later stage may move an earlier one's prediction.
+    let mut after_stage: Vec<(&'static str, TyreParams)> = Vec::new();
     for stage in STAGES {
         let t = Instant::now();
         let mut rep = StageReport::new(stage.name(), stage.channel().name());
@@ -581,6 +583,7 @@ pub fn fit(data: &Dataset, opts: &FitOptions) -> Result<FitResult, FitError> {
             rep.wall_s = t.elapsed().as_secs_f64();
             rep.iterations = 0;
             stages.push(rep);
+            after_stage.push((stage.name(), params.clone()));
             stage_data.push(StageData {
                 stage: stage.name().into(),
                 channel: stage.channel(),
@@ -660,8 +663,9 @@ pub fn fit(data: &Dataset, opts: &FitOptions) -> Result<FitResult, FitError> {
         }
         rep.wall_s = t.elapsed().as_secs_f64();
         stages.push(rep);
+        after_stage.push((stage.name(), params.clone()));
     }
-    mz_pure::refit_after_arm(&ctx, &mut params, &mut stages, &stage_data);
+    mz_pure::refit_after_arm(&ctx, &mut params, &mut stages, &stage_data, &after_stage);
     note_refined_later(&mut stages, &params);
     let mut my = StageReport::new("my", "MY");
     my.skipped = Some(

@@ -7,7 +7,7 @@
 
 use mftyre::TyreParams;
 
-use crate::engine::{Channel, Point, apply};
+use crate::engine::{Channel, Point, apply, values_of};
 use crate::error::FitError;
 use crate::physics::MarginSet;
 use crate::stages::context::{Ctx, StagePoints, near_nominal_camber, near_p0};
@@ -113,9 +113,10 @@ impl Stage for MzPure {
     }
 }
 
-/// Smallest RMS of the arm's moment s·Fx(κ = 0) at `mz_pure`'s points, as a share of the
-/// stage's RMSE there, for which the stage is refined after the arm is fitted: below it the arm
-/// moved the pure moment by less than the fit's own scatter.
+/// Smallest RMS change of the pure moment at `mz_pure`'s points since the stage was fitted
+/// (what the later stages' arm s·Fx(κ = 0) moved it by), as a share of the stage's RMSE there,
+/// for which the stage is refined: below it the later stages moved the pure moment by less than
+/// the fit's own scatter (a live update whose arm barely moved is not refined again).
 const ARM_SHARE: f64 = 0.1;
 /// Largest growth of the combined MZ RMSE (on `mz_combined`'s points) the refinement may cost:
 /// the joint refinement of the trail with the combined sweeps traded some pure fit for a
@@ -132,17 +133,29 @@ const COMBINED_TOLERANCE: f64 = 1.02;
 /// second start-from-data fit with the other coefficients fitted landed in another basin: RMSE
 /// 12.8 N·m). Kept where it fits the pure points better and the combined MZ no worse than
 /// [`COMBINED_TOLERANCE`]; the stage's report (RMSE, iterations, estimates) follows it.
-pub fn refit_after_arm(ctx: &Ctx, params: &mut TyreParams, stages: &mut [StageReport], data: &[StageData]) {
+///
+/// `after_stage` holds the model as each stage left it.
+pub fn refit_after_arm(
+    ctx: &Ctx,
+    params: &mut TyreParams,
+    stages: &mut [StageReport],
+    data: &[StageData],
+    after_stage: &[(&'static str, TyreParams)],
+) {
     let Some(d) = data.iter().find(|d| d.stage == MzPure.name()) else { return };
     let Some(rep) = stages.iter_mut().find(|r| r.stage == MzPure.name() && r.skipped.is_none()) else { return };
+    let Some((_, at_fit)) = after_stage.iter().find(|(name, _)| *name == MzPure.name()) else { return };
     let now = crate::fit::rms(params, &d.points, Channel::Mz0);
-    let mut no_arm = params.clone();
-    apply(&mut no_arm, &crate::stages::mz_combined::KEYS, &[0.0; 4]);
-    let with = Channel::Mz0.values_at(params, &d.points);
-    let without = Channel::Mz0.values_at(&no_arm, &d.points);
+    // The pure moment with this stage's own keys as they are now (a joint refinement may have
+    // moved them) and everything else as when the stage was fitted: what the later stages moved.
+    let own: Vec<&'static str> = [NOMINAL.as_slice(), CAMBER.as_slice(), PRESSURE.as_slice()].concat();
+    let mut then = at_fit.clone();
+    apply(&mut then, &own, &values_of(params, &own));
+    let moved = Channel::Mz0.values_at(params, &d.points);
+    let before = Channel::Mz0.values_at(&then, &d.points);
     let arm_rms =
-        (with.iter().zip(&without).map(|(a, b)| (a - b).powi(2)).sum::<f64>() / with.len().max(1) as f64).sqrt();
-    // NaN (no points) counts as no arm.
+        (moved.iter().zip(&before).map(|(a, b)| (a - b).powi(2)).sum::<f64>() / moved.len().max(1) as f64).sqrt();
+    // NaN (no points) counts as nothing moved.
     if arm_rms.is_nan() || arm_rms <= ARM_SHARE * now {
         return;
     }
@@ -161,7 +174,7 @@ pub fn refit_after_arm(ctx: &Ctx, params: &mut TyreParams, stages: &mut [StageRe
     if refined.is_ok() && again.rmse < now && comb_after <= COMBINED_TOLERANCE * comb_before {
         again.notes.push(format!(
             "refined after the arm s·Fx at κ = 0 was fitted (mz_combined's SSZ, fx_pure's force at zero slip \
-             ratio; its moment here {arm_rms:.4} RMS): RMSE {first_rmse:.4} at its own fit, {now:.4} with the arm, \
+             ratio; they moved the pure moment here by {arm_rms:.4} RMS): RMSE {first_rmse:.4} at its own fit, {now:.4} with the arm, \
              {:.4} refined; MZ combined {comb_before:.4} → {comb_after:.4}",
             again.rmse
         ));
