@@ -485,7 +485,7 @@ fn a_drive_brake_run_on_a_second_specimen_names_no_state_and_keeps_thermal() {
 
     let hidden: Vec<PathBuf> = pair
         .iter()
-        .zip([[15.0, 55.0], [55.0, 120.0]])
+        .zip(REAL_RUNS_LASERS_C)
         .map(|(run, to)| {
             let out = run.with_extension("real_temperatures_a.dat");
             hide_outsider_thermal(run, &out, &OutsiderThermal::A, Some(to));
@@ -501,6 +501,10 @@ fn a_drive_brake_run_on_a_second_specimen_names_no_state_and_keeps_thermal() {
     assert_eq!(d["written_model_worse"], serde_json::json!([]), "{}", d["written_model_worse"]);
 }
 
+/// The ranges of the tread lasers' mean real runs read [°C]: a cornering run, a drive/brake run
+/// (../shared/real-rig-data.md).
+const REAL_RUNS_LASERS_C: [[f64; 2]; 2] = [[15.0, 55.0], [55.0, 120.0]];
+
 /// The relaxing runs `clean` (cornering, drive/brake) with their tread lasers mapped to the
 /// ranges real runs read (15–55 °C cornering, 55–120 °C drive/brake) and `form` hidden in their
 /// forces, written beside them as `*.real_temperatures_<tag>.dat` and diagnosed with a fit.
@@ -513,10 +517,9 @@ fn diagnose_at_real_temperatures(
     tag: &str,
     second_specimen_fx: f64,
 ) -> serde_json::Value {
-    let lasers = [[15.0, 55.0], [55.0, 120.0]];
     let hidden: Vec<PathBuf> = clean
         .iter()
-        .zip(lasers)
+        .zip(REAL_RUNS_LASERS_C)
         .enumerate()
         .map(|(run, (c, to))| {
             let out = c.with_extension(format!("real_temperatures_{tag}.dat"));
