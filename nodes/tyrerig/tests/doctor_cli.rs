@@ -254,27 +254,32 @@ fn doctor_with_fit(files: &[PathBuf], out: &std::path::Path) -> serde_json::Valu
 /// sweeps, headless with the rig's relaxation on (`noise,thermal,transient`: FY lags SA, as in
 /// real runs), logged in `dir` and exported to TTC `.dat` beside each log; the logs' paths.
 fn relaxing_ttc_runs(dir: &std::path::Path) -> Vec<PathBuf> {
+    let rig = repo_root().join("launch-config/virtual_rig_brush_race.toml");
+    ["ttc_cornering_race", "ttc_drive_brake_race_warmup"].map(|p| relaxing_ttc_run(&rig, p, dir)).to_vec()
+}
+
+/// One TTC-style procedure `proc_name` run headless on the rig `rig` with the rig's relaxation
+/// on (`noise,thermal,transient`), logged in `dir` and exported to TTC `.dat` beside the log;
+/// the log's path.
+fn relaxing_ttc_run(rig: &std::path::Path, proc_name: &str, dir: &std::path::Path) -> PathBuf {
     use std::ffi::OsString;
-    let root = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../..");
-    let rig = root.join("launch-config/virtual_rig_brush_race.toml");
-    let mut logs = Vec::new();
-    for proc_name in ["ttc_cornering_race", "ttc_drive_brake_race_warmup"] {
-        let log = dir.join(format!("{proc_name}.mcap"));
-        let mut run: Vec<OsString> =
-            ["run", "--headless", "--quiet", "--effects", "noise,thermal,transient", "--rig-config"]
-                .iter()
-                .map(OsString::from)
-                .collect();
-        run.push(rig.clone().into());
-        run.push("--procedure".into());
-        run.push(root.join(format!("launch-config/procedures/{proc_name}.toml")).into());
-        run.push("--out".into());
-        run.push(log.clone().into());
-        run_tyrerig(run);
-        run_tyrerig(vec!["export".into(), "ttc".into(), log.clone().into()]);
-        logs.push(log);
-    }
-    logs
+    let log = dir.join(format!("{proc_name}.mcap"));
+    let mut run: Vec<OsString> =
+        ["run", "--headless", "--quiet", "--effects", "noise,thermal,transient", "--rig-config"]
+            .iter()
+            .map(OsString::from)
+            .collect();
+    run.extend([rig.into(), "--procedure".into()]);
+    run.push(repo_root().join(format!("launch-config/procedures/{proc_name}.toml")).into());
+    run.extend(["--out".into(), log.clone().into()]);
+    run_tyrerig(run);
+    run_tyrerig(vec!["export".into(), "ttc".into(), log.clone().into()]);
+    log
+}
+
+/// The repository's root (launch-config, tyres, procedures).
+fn repo_root() -> PathBuf {
+    PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../..")
 }
 
 /// Issue 30: real runs relax (FY lags the slip angle), and a thermal effect hidden in them must
@@ -408,20 +413,20 @@ fn thermal_hidden_at_real_runs_temperatures_is_named_and_cuts_its_region_by_half
         let parameters = thermal.map(|t| &t["parameters"]).expect("thermal's parameters");
         assert!(parameters.get("THERMAL_FORCE_1").is_some(), "{case}: not the force level: {parameters}");
     };
-    let d = diagnose_at_real_temperatures(&clean, &dir, &OutsiderThermal::A, "a", 1.0);
+    let d = diagnose_at_real_temperatures(&clean, &dir, &OutsiderThermal::A, "a", None);
     named_beside_transient_cutting_half(&d, "A");
 
     // B at those temperatures holds the drive/brake run at its 28 % floor; `transient` must
     // survive the backward check beside it. When that check let the thermal effect refitted
     // without `transient` choose its temperature afresh, a temperature rising through each sweep
     // took the relaxation's hysteresis and `transient` was dropped (2.7 % beside it).
-    let d = diagnose_at_real_temperatures(&clean, &dir, &OutsiderThermal::B, "b", 1.0);
+    let d = diagnose_at_real_temperatures(&clean, &dir, &OutsiderThermal::B, "b", None);
     named_beside_transient_cutting_half(&d, "B");
 
     // C (symmetric): the model as written must fit the logs better than the base. When an
     // effect fitted with its operating-point share taken out was exempt from the written-model
     // rule, its model fitted FYW at 199–239 N RMS against the base's 80 N.
-    let d = diagnose_at_real_temperatures(&clean, &dir, &OutsiderThermal::C, "c", 1.0);
+    let d = diagnose_at_real_temperatures(&clean, &dir, &OutsiderThermal::C, "c", None);
     named_beside_transient_cutting_half(&d, "C");
     for ch in ["FX", "FYW"] {
         let (base, written) = (d["rms"]["base"][ch].as_f64(), d["rms"]["final_fit"][ch].as_f64());
@@ -431,7 +436,7 @@ fn thermal_hidden_at_real_runs_temperatures_is_named_and_cuts_its_region_by_half
 
     // A, the drive/brake run on a second specimen (real pairs' peak forces differ by 10–14 %):
     // its FX and NFX × 0.90, FY, MZ and NFY × 0.93.
-    let d = diagnose_at_real_temperatures(&clean, &dir, &OutsiderThermal::A, "a_specimen", 0.9);
+    let d = diagnose_at_real_temperatures(&clean, &dir, &OutsiderThermal::A, "a_specimen", Some([0.90, 0.93]));
     named_beside_transient_cutting_half(&d, "A, second specimen");
     assert_eq!(d["written_model_worse"], serde_json::json!([]), "{}", d["written_model_worse"]);
 }
@@ -446,15 +451,14 @@ fn thermal_hidden_at_real_runs_temperatures_is_named_and_cuts_its_region_by_half
 /// half (measured 101.9 → 46.3 N held-out, −55 %).
 #[test]
 fn a_drive_brake_run_on_a_second_specimen_names_no_state_and_keeps_thermal() {
-    use std::ffi::OsString;
-    let root = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../..");
     let dir = PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join("doctor_cli").join("second_specimen");
     let specimen = dir.join("specimen2");
     std::fs::create_dir_all(specimen.join("tyres")).expect("output dir");
-    let clean = relaxing_ttc_runs(&dir);
+    let cornering =
+        relaxing_ttc_run(&repo_root().join("launch-config/virtual_rig_brush_race.toml"), "ttc_cornering_race", &dir);
 
-    let tyre = std::fs::read_to_string(root.join("launch-config/tyres/brush_race.toml")).expect("brush race tyre");
-    let mut second = tyre.clone();
+    let mut second =
+        std::fs::read_to_string(repo_root().join("launch-config/tyres/brush_race.toml")).expect("brush race tyre");
     for (from, to) in [
         ("longitudinal_stiffness_n_per_m2 = 9.8e6", "longitudinal_stiffness_n_per_m2 = 7.84e6"),
         ("lateral_stiffness_n_per_m2 = 7.0e6", "lateral_stiffness_n_per_m2 = 5.6e6"),
@@ -466,33 +470,14 @@ fn a_drive_brake_run_on_a_second_specimen_names_no_state_and_keeps_thermal() {
     }
     std::fs::write(specimen.join("tyres/brush_race.toml"), second).expect("second specimen");
     let rig = specimen.join("virtual_rig_brush_race.toml");
-    std::fs::copy(root.join("launch-config/virtual_rig_brush_race.toml"), &rig).expect("rig config");
-    let log = specimen.join("ttc_drive_brake_race_warmup.mcap");
-    let mut run: Vec<OsString> =
-        ["run", "--headless", "--quiet", "--effects", "noise,thermal,transient", "--rig-config"]
-            .iter()
-            .map(OsString::from)
-            .collect();
-    run.extend([rig.into(), "--procedure".into()]);
-    run.push(root.join("launch-config/procedures/ttc_drive_brake_race_warmup.toml").into());
-    run.extend(["--out".into(), log.clone().into()]);
-    run_tyrerig(run);
-    run_tyrerig(vec!["export".into(), "ttc".into(), log.clone().into()]);
+    std::fs::copy(repo_root().join("launch-config/virtual_rig_brush_race.toml"), &rig).expect("rig config");
+    let drive_brake = relaxing_ttc_run(&rig, "ttc_drive_brake_race_warmup", &specimen);
 
-    let pair = [clean[0].with_extension("dat"), log.with_extension("dat")];
-    let d = doctor_with_fit(&pair, &dir.join("doctor_clean"));
+    let pair = [cornering, drive_brake];
+    let d = doctor_with_fit(&pair.each_ref().map(|log| log.with_extension("dat")), &dir.join("doctor_clean"));
     assert_eq!(named(&d), ["transient"], "{}", d["stop_reason"]);
 
-    let hidden: Vec<PathBuf> = pair
-        .iter()
-        .zip(REAL_RUNS_LASERS_C)
-        .map(|(run, to)| {
-            let out = run.with_extension("real_temperatures_a.dat");
-            hide_outsider_thermal(run, &out, &OutsiderThermal::A, Some(to));
-            out
-        })
-        .collect();
-    let d = doctor_with_fit(&hidden, &dir.join("doctor_a"));
+    let d = diagnose_at_real_temperatures(&pair, &dir, &OutsiderThermal::A, "a", None);
     let mut names = named(&d);
     names.sort();
     assert_eq!(names, ["thermal", "transient"], "named {names:?}; dropped {}", d["dropped"]);
@@ -508,14 +493,14 @@ const REAL_RUNS_LASERS_C: [[f64; 2]; 2] = [[15.0, 55.0], [55.0, 120.0]];
 /// The relaxing runs `clean` (cornering, drive/brake) with their tread lasers mapped to the
 /// ranges real runs read (15–55 °C cornering, 55–120 °C drive/brake) and `form` hidden in their
 /// forces, written beside them as `*.real_temperatures_<tag>.dat` and diagnosed with a fit.
-/// With `second_specimen_fx` below 1 the drive/brake run is another tyre's: its FX and NFX
-/// times that, FY, MZ and NFY times 0.93.
+/// With `second_specimen` = [fx, fy] the drive/brake run is another tyre's: its FX and NFX
+/// times fx, FY, MZ and NFY times fy.
 fn diagnose_at_real_temperatures(
     clean: &[PathBuf],
     dir: &std::path::Path,
     form: &OutsiderThermal,
     tag: &str,
-    second_specimen_fx: f64,
+    second_specimen: Option<[f64; 2]>,
 ) -> serde_json::Value {
     let hidden: Vec<PathBuf> = clean
         .iter()
@@ -524,8 +509,8 @@ fn diagnose_at_real_temperatures(
         .map(|(run, (c, to))| {
             let out = c.with_extension(format!("real_temperatures_{tag}.dat"));
             hide_outsider_thermal(&c.with_extension("dat"), &out, form, Some(to));
-            if run == 1 && second_specimen_fx < 1.0 {
-                scale_forces(&out, second_specimen_fx, 0.93);
+            if let (1, Some([fx, fy])) = (run, second_specimen) {
+                scale_forces(&out, fx, fy);
             }
             out
         })
