@@ -715,13 +715,15 @@ impl Ctx<'_> {
         eff: Effect,
         fe: Option<&FormError>,
     ) -> Option<(CandidateFit, usize)> {
-        let whole = self.fit_state_as(model, lin, eff, fe, None);
+        let grid = self.ev.choice_grid(eff, self.cfg.form_correction);
+        let whole = self.fit_state_as(model, lin, eff, fe, grid.clone());
         // A reduced form the data may tell apart from what the model holds when the whole one
-        // cannot ([`state::StateForm`]): the one of the two that predicts held-out sweeps better.
-        let Some(form) = state::StateForm::held_out_alternative(eff) else { return whole };
-        let reduced_choice =
-            self.ev.choice_grid(eff, self.cfg.form_correction).into_iter().next().map(|c| Choice { form, ..c });
-        let reduced = reduced_choice.and_then(|c| self.fit_state_as(model, lin, eff, fe, Some(c)));
+        // cannot ([`state::StateForm`]): the one of the two that predicts held-out sweeps better,
+        // its other knobs chosen on the data as the whole form's are.
+        let beside_state = model.iter().any(|e| state::is_state_scaling(e.effect));
+        let Some(form) = state::StateForm::held_out_alternative(eff, beside_state) else { return whole };
+        let reduced_grid: Vec<Choice> = grid.into_iter().map(|c| Choice { form, ..c }).collect();
+        let reduced = self.fit_state_as(model, lin, eff, fe, reduced_grid);
         let heldout_chi2 = |f: &(CandidateFit, usize)| total(chi2(&self.meas, &f.0.pred_ho, &self.sigma, &self.all));
         match (whole, reduced) {
             (Some(w), Some(r)) if heldout_chi2(&r) < heldout_chi2(&w) => Some(r),
@@ -730,14 +732,14 @@ impl Ctx<'_> {
     }
 
     /// [`Ctx::fit_state`] with the discrete choice (thermal's source, lag, surface share and
-    /// form; break-in's energy scale and threshold) given instead of chosen on the data.
+    /// form; break-in's energy scale and threshold) chosen on the data among `grid`.
     fn fit_state_as(
         &self,
         model: &[EffectParams],
         lin: &linfit::Linearization,
         eff: Effect,
         fe: Option<&FormError>,
-        given: Option<Choice>,
+        grid: Vec<Choice>,
     ) -> Option<(CandidateFit, usize)> {
         if state::terms(eff, self.coverage).is_empty() {
             return None;
@@ -758,10 +760,6 @@ impl Ctx<'_> {
                 Some(f) => std::array::from_fn(|ch| self.meas[k][ch] - f.all[k][ch]),
                 None => self.meas[k],
             }
-        };
-        let grid = match given {
-            Some(c) => vec![c],
-            None => self.ev.choice_grid(eff, self.cfg.form_correction),
         };
         let choice = grid
             .into_iter()
@@ -1285,7 +1283,8 @@ impl Ctx<'_> {
         // the brush race tyre, an outsider's thermal effect at real runs' temperatures and a
         // second specimen, docs/doctor.md).
         let given = full.present.iter().find(|e| e.effect == last).map(|e| e.parsed().choice);
-        let (fit, _) = self.fit_state_as(&rest, &lin, last, full.form_error.as_ref(), given)?;
+        let grid = given.map_or_else(|| self.ev.choice_grid(last, self.cfg.form_correction), |c| vec![c]);
+        let (fit, _) = self.fit_state_as(&rest, &lin, last, full.form_error.as_ref(), grid)?;
         Some(fit.model)
     }
 

@@ -386,6 +386,67 @@ fn wear_hidden_by_an_outsider_in_relaxing_ttc_runs_is_named_beside_transient_alo
     assert_eq!(names, ["transient"], "named {names:?} on the runs as they are; {}", d["stop_reason"]);
 }
 
+/// Issue 30: an outsider's break-in hidden in relaxing TTC-style runs is named `break_in`, beside
+/// `transient`, and cuts its region by half. Its form is neither the doctor's nor the injector's:
+/// grip, not stiffness — every force times 1 − 0.15·exp(−s/s₀)·(1 − exp(−(|α| + |κ|)/0.05)), s
+/// the sliding distance so far (V·(|sin SA| + |SL|) over ET), s₀ 8 % of the file's total, each
+/// file a fresh specimen. It lives in each run's first sweeps, which are of one kind per run
+/// (cornering, or driving and braking): with every factor its own coefficients, a held-out first
+/// cornering sweep was predicted from what was left, and break-in lost 43 % of the held-out χ²
+/// (only `transient` was named); on the force level both runs' first sweeps tell one factor
+/// (measured: FX in its region 70.9 → 29.6 N held-out, −58 %).
+#[test]
+fn break_in_hidden_by_an_outsider_in_relaxing_ttc_runs_is_named_beside_transient() {
+    let dir = PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join("doctor_cli").join("relaxing_ttc_break_in");
+    std::fs::create_dir_all(&dir).expect("output dir");
+    let broken_in: Vec<PathBuf> = relaxing_ttc_runs(&dir)
+        .iter()
+        .map(|c| {
+            let out = c.with_extension("break_in.dat");
+            hide_outsider_break_in(&c.with_extension("dat"), &out);
+            out
+        })
+        .collect();
+    let d = doctor_with_fit(&broken_in, &dir.join("doctor"));
+    let mut names = named(&d);
+    names.sort();
+    assert_eq!(names, ["break_in", "transient"], "named {names:?}; {}", d["stop_reason"]);
+    let (before, after) = region_rms(&d, "break_in");
+    assert!(after <= 0.5 * before, "break_in's region, held-out: {before} -> {after}");
+}
+
+/// Issue 30: an outsider's thermal effect (A, at the temperatures real runs read) and wear (the
+/// form of `wear_hidden_by_an_outsider_…`) hidden together in relaxing TTC-style runs: nothing is
+/// named that is not there (an independent generator's thermal + wear had been named `wear,
+/// thermal, load`), `thermal` is named beside `transient` and cuts its region by half. Wear is
+/// missed here: its one sure sign, the radius, is screened out — the sliding energy keeps a share
+/// of 0.090 at fixed operating points, under the 0.1 a term needs (0.102 without the thermal
+/// effect, where wear is named). A threshold of 0.05 for the radius named `wear, thermal,
+/// transient` here but lost the benchmark's brush road TTC-style `wear/s1` to a tie with thermal's
+/// radius (docs/doctor.md, "TTC-style runs with an outsider's break-in, or thermal and wear").
+#[test]
+fn thermal_and_wear_hidden_by_an_outsider_in_relaxing_ttc_runs_name_nothing_that_is_not_there() {
+    let dir = PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join("doctor_cli").join("relaxing_ttc_thermal_wear");
+    std::fs::create_dir_all(&dir).expect("output dir");
+    let hidden: Vec<PathBuf> = relaxing_ttc_runs(&dir)
+        .iter()
+        .zip(REAL_RUNS_LASERS_C)
+        .map(|(c, to)| {
+            let (hot, out) = (c.with_extension("thermal.dat"), c.with_extension("thermal_wear.dat"));
+            hide_outsider_thermal(&c.with_extension("dat"), &hot, &OutsiderThermal::A, Some(to));
+            hide_outsider_wear(&hot, &out);
+            out
+        })
+        .collect();
+    let d = doctor_with_fit(&hidden, &dir.join("doctor"));
+    let mut names = named(&d);
+    names.sort();
+    assert!(names.iter().all(|n| ["thermal", "transient", "wear"].contains(&n.as_str())), "named {names:?}");
+    assert!(names.contains(&"thermal".to_owned()) && names.contains(&"transient".to_owned()), "named {names:?}");
+    let (before, after) = region_rms(&d, "thermal");
+    assert!(after <= 0.5 * before, "thermal's region, held-out: {before} -> {after}");
+}
+
 /// Issue 30: the thermal effect hidden in real runs, at the temperatures real runs read. Real
 /// cornering runs read 15–55 °C on the tread lasers and drive/brake runs 55–120 °C
 /// (../shared/real-rig-data.md); the virtual runs read 38–67 °C and 38–100 °C. The same relaxing
@@ -557,39 +618,31 @@ fn hide_outsider_thermal(
     form: &OutsiderThermal,
     lasers_to: Option<[f64; 2]>,
 ) {
-    let text = std::fs::read_to_string(input).expect("exported .dat");
-    let mut lines = text.lines();
-    let (title, names, units) =
-        (lines.next().expect("title"), lines.next().expect("names"), lines.next().expect("units"));
-    let col = |n: &str| names.split('\t').position(|c| c == n).unwrap_or_else(|| panic!("no {n} in {names}"));
-    let (et, temps) = (col("ET"), [col("TSTI"), col("TSTC"), col("TSTO")]);
-    let forces: Vec<usize> = ["FX", "FY", "MZ", "NFX", "NFY"].iter().map(|n| col(n)).collect();
-    let num = |v: &[String], i: usize| v[i].parse::<f64>().unwrap_or(f64::NAN);
-    let mut rows: Vec<Vec<String>> =
-        lines.filter(|l| !l.trim().is_empty()).map(|l| l.split('\t').map(str::to_owned).collect()).collect();
+    let mut dat = DatTable::read(input);
+    let (et, temps) = (dat.col("ET"), [dat.col("TSTI"), dat.col("TSTC"), dat.col("TSTO")]);
+    let forces: Vec<usize> = ["FX", "FY", "MZ", "NFX", "NFY"].iter().map(|n| dat.col(n)).collect();
     let surface_of = |v: &[String]| {
-        let ts: Vec<f64> = temps.iter().map(|&i| num(v, i)).filter(|x| x.is_finite()).collect();
+        let ts: Vec<f64> = temps.iter().map(|&i| field(v, i)).filter(|x| x.is_finite()).collect();
         ts.iter().sum::<f64>() / ts.len().max(1) as f64
     };
     if let Some([lo, hi]) = lasers_to {
-        let mut s: Vec<f64> = rows.iter().map(|v| surface_of(v)).filter(|x| x.is_finite()).collect();
+        let mut s: Vec<f64> = dat.rows.iter().map(|v| surface_of(v)).filter(|x| x.is_finite()).collect();
         s.sort_by(f64::total_cmp);
         let q = |p: f64| s[((s.len() - 1) as f64 * p) as usize];
         let (q_lo, q_hi) = (q(0.02), q(0.98));
-        for v in &mut rows {
+        for v in &mut dat.rows {
             for &i in &temps {
-                let x = num(v, i);
+                let x = field(v, i);
                 if x.is_finite() {
                     v[i] = format!("{:.3}", lo + (x - q_lo) * (hi - lo) / (q_hi - q_lo));
                 }
             }
         }
     }
-    let mut out = format!("{title}\n{names}\n{units}\n");
     let (mut bulk, mut last_t) = (f64::NAN, 0.0);
-    for mut v in rows {
-        let t = num(&v, et);
-        let surface = surface_of(&v);
+    for v in &mut dat.rows {
+        let t = field(v, et);
+        let surface = surface_of(v);
         if !bulk.is_finite() {
             bulk = surface;
         } else if surface.is_finite() {
@@ -598,63 +651,47 @@ fn hide_outsider_thermal(
         last_t = t;
         let g = if bulk.is_finite() { form.factor(bulk) } else { 1.0 };
         for &i in &forces {
-            let x = num(&v, i);
+            let x = field(v, i);
             if x.is_finite() {
                 v[i] = format!("{:.6}", x * g);
             }
         }
-        out.push_str(&v.join("\t"));
-        out.push('\n');
     }
-    std::fs::write(output, out).expect("write the hidden .dat");
+    dat.write(output);
 }
 
 /// Scales a TTC `.dat`'s longitudinal forces (FX, NFX) by `fx` and its lateral ones (FY, MZ,
 /// NFY) by `fy`, in place: the same run on another specimen of the tyre.
 fn scale_forces(path: &std::path::Path, fx: f64, fy: f64) {
-    let text = std::fs::read_to_string(path).expect("a .dat");
-    let mut lines = text.lines();
-    let (title, names, units) =
-        (lines.next().expect("title"), lines.next().expect("names"), lines.next().expect("units"));
-    let col = |n: &str| names.split('\t').position(|c| c == n).unwrap_or_else(|| panic!("no {n} in {names}"));
+    let mut dat = DatTable::read(path);
     let scales: Vec<(usize, f64)> =
-        [("FX", fx), ("NFX", fx), ("FY", fy), ("MZ", fy), ("NFY", fy)].iter().map(|&(n, k)| (col(n), k)).collect();
-    let mut out = format!("{title}\n{names}\n{units}\n");
-    for line in lines.filter(|l| !l.trim().is_empty()) {
-        let mut v: Vec<String> = line.split('\t').map(str::to_owned).collect();
+        [("FX", fx), ("NFX", fx), ("FY", fy), ("MZ", fy), ("NFY", fy)].iter().map(|&(n, k)| (dat.col(n), k)).collect();
+    for v in &mut dat.rows {
         for &(i, k) in &scales {
             if let Ok(x) = v[i].parse::<f64>() {
                 v[i] = format!("{:.6}", x * k);
             }
         }
-        out.push_str(&v.join("\t"));
-        out.push('\n');
     }
-    std::fs::write(path, out).expect("write the scaled .dat");
+    dat.write(path);
 }
 
 /// Hides an outsider's wear in a TTC `.dat` (see
 /// `wear_hidden_by_an_outsider_in_relaxing_ttc_runs_is_named_beside_transient_alone`): forces times 1 − 0.10·w^0.6,
 /// the loaded radius (cm) 0.08·w smaller, w the sliding energy so far over the file's total.
 fn hide_outsider_wear(input: &std::path::Path, output: &std::path::Path) {
-    let text = std::fs::read_to_string(input).expect("exported .dat");
-    let mut lines = text.lines();
-    let (title, names, units) =
-        (lines.next().expect("title"), lines.next().expect("names"), lines.next().expect("units"));
-    let col = |n: &str| names.split('\t').position(|c| c == n).unwrap_or_else(|| panic!("no {n} in {names}"));
-    let (et, v_kph, sa, sl, fx, fy, rl) = (col("ET"), col("V"), col("SA"), col("SL"), col("FX"), col("FY"), col("RL"));
-    let forces: Vec<usize> = ["FX", "FY", "MZ", "NFX", "NFY"].iter().map(|n| col(n)).collect();
-    let rows: Vec<Vec<String>> =
-        lines.filter(|l| !l.trim().is_empty()).map(|l| l.split('\t').map(str::to_owned).collect()).collect();
-    let num = |v: &[String], i: usize| v[i].parse::<f64>().unwrap_or(f64::NAN);
+    let mut dat = DatTable::read(input);
+    let (et, v_kph, sa, sl, fx, fy, rl) =
+        (dat.col("ET"), dat.col("V"), dat.col("SA"), dat.col("SL"), dat.col("FX"), dat.col("FY"), dat.col("RL"));
+    let forces: Vec<usize> = ["FX", "FY", "MZ", "NFX", "NFY"].iter().map(|n| dat.col(n)).collect();
     let finite_or_zero = |x: f64| if x.is_finite() { x } else { 0.0 };
-    let mut energy = Vec::with_capacity(rows.len());
+    let mut energy = Vec::with_capacity(dat.rows.len());
     let (mut e, mut last_t) = (0.0, f64::NAN);
-    for v in &rows {
-        let t = num(v, et);
-        let speed = num(v, v_kph) / 3.6;
-        let power = finite_or_zero((num(v, fy) * num(v, sa).to_radians().sin()).abs() * speed)
-            + finite_or_zero((num(v, fx) * num(v, sl)).abs() * speed);
+    for v in &dat.rows {
+        let t = field(v, et);
+        let speed = field(v, v_kph) / 3.6;
+        let power = finite_or_zero((field(v, fy) * field(v, sa).to_radians().sin()).abs() * speed)
+            + finite_or_zero((field(v, fx) * field(v, sl)).abs() * speed);
         if (t - last_t).is_finite() {
             e += power * (t - last_t).max(0.0);
         }
@@ -664,22 +701,96 @@ fn hide_outsider_wear(input: &std::path::Path, output: &std::path::Path) {
         energy.push(e);
     }
     let total = e.max(1.0);
-    let mut out = format!("{title}\n{names}\n{units}\n");
-    for (mut v, e) in rows.into_iter().zip(energy) {
+    for (v, e) in dat.rows.iter_mut().zip(energy) {
         let w = (e / total).clamp(0.0, 1.0);
         let g = 1.0 - 0.10 * w.powf(0.6);
         for &i in &forces {
-            let x = num(&v, i);
+            let x = field(v, i);
             if x.is_finite() {
                 v[i] = format!("{:.6}", x * g);
             }
         }
-        let r = num(&v, rl);
+        let r = field(v, rl);
         if r.is_finite() {
             v[rl] = format!("{:.6}", r - 0.08 * w);
         }
-        out.push_str(&v.join("\t"));
-        out.push('\n');
     }
-    std::fs::write(output, out).expect("write the worn .dat");
+    dat.write(output);
+}
+
+/// A TTC `.dat` as text: its three header lines and its rows' fields.
+struct DatTable {
+    header: String,
+    names: Vec<String>,
+    rows: Vec<Vec<String>>,
+}
+
+impl DatTable {
+    fn read(path: &std::path::Path) -> Self {
+        let text = std::fs::read_to_string(path).expect("a .dat");
+        let mut lines = text.lines();
+        let (title, names, units) =
+            (lines.next().expect("title"), lines.next().expect("names"), lines.next().expect("units"));
+        let rows = lines.filter(|l| !l.trim().is_empty()).map(|l| l.split('\t').map(str::to_owned).collect()).collect();
+        Self {
+            header: format!("{title}\n{names}\n{units}\n"),
+            names: names.split('\t').map(str::to_owned).collect(),
+            rows,
+        }
+    }
+
+    fn col(&self, name: &str) -> usize {
+        self.names.iter().position(|c| c == name).unwrap_or_else(|| panic!("no {name} in {:?}", self.names))
+    }
+
+    fn write(&self, path: &std::path::Path) {
+        let mut out = self.header.clone();
+        for v in &self.rows {
+            out.push_str(&v.join("\t"));
+            out.push('\n');
+        }
+        std::fs::write(path, out).expect("write the .dat");
+    }
+}
+
+/// A field of a `.dat` row as a number (NaN where it is not one).
+fn field(v: &[String], i: usize) -> f64 {
+    v[i].parse::<f64>().unwrap_or(f64::NAN)
+}
+
+/// Hides an outsider's break-in in a TTC `.dat` (see
+/// `break_in_hidden_by_an_outsider_in_relaxing_ttc_runs_is_named_beside_transient`): forces times
+/// 1 − 0.15·exp(−s/s₀)·(1 − exp(−(|α| + |κ|)/0.05)), s the sliding distance so far, s₀ 8 % of its
+/// total; the loaded radius untouched.
+fn hide_outsider_break_in(input: &std::path::Path, output: &std::path::Path) {
+    let mut dat = DatTable::read(input);
+    let (et, v_kph, sa, sl) = (dat.col("ET"), dat.col("V"), dat.col("SA"), dat.col("SL"));
+    let forces: Vec<usize> = ["FX", "FY", "MZ", "NFX", "NFY"].iter().map(|n| dat.col(n)).collect();
+    let finite_or_zero = |x: f64| if x.is_finite() { x } else { 0.0 };
+    let slips = |v: &[String]| (finite_or_zero(field(v, sa)).to_radians().abs(), finite_or_zero(field(v, sl)).abs());
+    let mut distance = Vec::with_capacity(dat.rows.len());
+    let (mut s, mut last_t) = (0.0, f64::NAN);
+    for v in &dat.rows {
+        let t = field(v, et);
+        let (alpha, kappa) = slips(v);
+        if (t - last_t).is_finite() {
+            s += finite_or_zero(field(v, v_kph) / 3.6) * (alpha.sin() + kappa) * (t - last_t).max(0.0);
+        }
+        if t.is_finite() {
+            last_t = t;
+        }
+        distance.push(s);
+    }
+    let s0 = 0.08 * s.max(1e-9);
+    for (v, s) in dat.rows.iter_mut().zip(distance) {
+        let (alpha, kappa) = slips(v);
+        let g = 1.0 - 0.15 * (-s / s0).exp() * (1.0 - (-(alpha + kappa) / 0.05).exp());
+        for &i in &forces {
+            let x = field(v, i);
+            if x.is_finite() {
+                v[i] = format!("{:.6}", x * g);
+            }
+        }
+    }
+    dat.write(output);
 }
