@@ -397,19 +397,9 @@ fn wear_hidden_by_an_outsider_in_relaxing_ttc_runs_is_named_beside_transient_alo
 /// (measured: FX in its region 70.9 → 29.6 N held-out, −58 %).
 #[test]
 fn break_in_hidden_by_an_outsider_in_relaxing_ttc_runs_is_named_beside_transient() {
-    let dir = PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join("doctor_cli").join("relaxing_ttc_break_in");
-    std::fs::create_dir_all(&dir).expect("output dir");
-    let broken_in: Vec<PathBuf> = relaxing_ttc_runs(&dir)
-        .iter()
-        .map(|c| {
-            let out = c.with_extension("break_in.dat");
-            hide_outsider_break_in(&c.with_extension("dat"), &out);
-            out
-        })
-        .collect();
-    let d = doctor_with_fit(&broken_in, &dir.join("doctor"));
-    let mut names = named(&d);
-    names.sort();
+    let (d, names) = diagnose_hidden_in_relaxing_ttc_runs("relaxing_ttc_break_in", |clean, out, _| {
+        hide_outsider_break_in(clean, out);
+    });
     assert_eq!(names, ["break_in", "transient"], "named {names:?}; {}", d["stop_reason"]);
     let (before, after) = region_rms(&d, "break_in");
     assert!(after <= 0.5 * before, "break_in's region, held-out: {before} -> {after}");
@@ -426,25 +416,39 @@ fn break_in_hidden_by_an_outsider_in_relaxing_ttc_runs_is_named_beside_transient
 /// radius (docs/doctor.md, "TTC-style runs with an outsider's break-in, or thermal and wear").
 #[test]
 fn thermal_and_wear_hidden_by_an_outsider_in_relaxing_ttc_runs_name_nothing_that_is_not_there() {
-    let dir = PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join("doctor_cli").join("relaxing_ttc_thermal_wear");
+    let (d, names) = diagnose_hidden_in_relaxing_ttc_runs("relaxing_ttc_thermal_wear", |clean, out, run| {
+        let hot = out.with_extension("thermal.dat");
+        hide_outsider_thermal(clean, &hot, &OutsiderThermal::A, Some(REAL_RUNS_LASERS_C[run]));
+        hide_outsider_wear(&hot, out);
+    });
+    assert!(names.iter().all(|n| ["thermal", "transient", "wear"].contains(&n.as_str())), "named {names:?}");
+    assert!(names.contains(&"thermal".to_owned()) && names.contains(&"transient".to_owned()), "named {names:?}");
+    let (before, after) = region_rms(&d, "thermal");
+    assert!(after <= 0.5 * before, "thermal's region, held-out: {before} -> {after}");
+}
+
+/// The relaxing TTC-style runs (`relaxing_ttc_runs`, in `doctor_cli/<case>`) with an effect
+/// hidden in each exported `.dat` by `hide(clean, hidden, run)` (run 0 cornering, 1
+/// drive/brake), diagnosed with `--fit`: the doctor's JSON and the names it gave, sorted.
+fn diagnose_hidden_in_relaxing_ttc_runs(
+    case: &str,
+    hide: impl Fn(&std::path::Path, &std::path::Path, usize),
+) -> (serde_json::Value, Vec<String>) {
+    let dir = PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join("doctor_cli").join(case);
     std::fs::create_dir_all(&dir).expect("output dir");
     let hidden: Vec<PathBuf> = relaxing_ttc_runs(&dir)
         .iter()
-        .zip(REAL_RUNS_LASERS_C)
-        .map(|(c, to)| {
-            let (hot, out) = (c.with_extension("thermal.dat"), c.with_extension("thermal_wear.dat"));
-            hide_outsider_thermal(&c.with_extension("dat"), &hot, &OutsiderThermal::A, Some(to));
-            hide_outsider_wear(&hot, &out);
+        .enumerate()
+        .map(|(run, c)| {
+            let out = c.with_extension("hidden.dat");
+            hide(&c.with_extension("dat"), &out, run);
             out
         })
         .collect();
     let d = doctor_with_fit(&hidden, &dir.join("doctor"));
     let mut names = named(&d);
     names.sort();
-    assert!(names.iter().all(|n| ["thermal", "transient", "wear"].contains(&n.as_str())), "named {names:?}");
-    assert!(names.contains(&"thermal".to_owned()) && names.contains(&"transient".to_owned()), "named {names:?}");
-    let (before, after) = region_rms(&d, "thermal");
-    assert!(after <= 0.5 * before, "thermal's region, held-out: {before} -> {after}");
+    (d, names)
 }
 
 /// Issue 30: the thermal effect hidden in real runs, at the temperatures real runs read. Real
