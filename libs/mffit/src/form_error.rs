@@ -91,7 +91,7 @@ impl SlipAxis {
 /// many sweeps goes). A direction only that sweep informs is left where it was (A₋ₛ⁺ is the
 /// pseudo-inverse): the data without it cannot say anything there.
 ///
-/// `jacobian[k][i]` = ∂values[i]/∂(k-th coefficient). Returns `values` unchanged where the
+/// `jacobian[k][i]` = ∂values\[i\]/∂(k-th coefficient). Returns `values` unchanged where the
 /// Jacobian is empty or its shape does not match.
 pub fn held_out_values(points: &[Point], groups: &[usize], values: &[f64], jacobian: &[Vec<f64>]) -> Vec<f64> {
     use nalgebra::{DMatrix, DVector};

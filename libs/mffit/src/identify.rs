@@ -13,7 +13,7 @@
 //! 2. **The Jacobian** — at the stage's start, the residuals' sensitivity to each key, columns
 //!    normalised, taken in the stage's priority order (nominal terms first): a key whose column
 //!    is (numerically) a combination of the keys already accepted cannot be told apart from them
-//!    by this data (variance inflation above [`MAX_VIF`]), and is held ([`identify`]).
+//!    by this data (variance inflation above [`MAX_VIF`]), and is held ([`by_jacobian`]).
 //!
 //! After the fit, [`uncertainty`] gives each fitted coefficient a standard deviation from the
 //! Jacobian at the solution and the residual variance: cov = s²·(JᵀJ)⁻¹, with s² the residual
