@@ -85,19 +85,18 @@ pub fn kfold(
         if test.is_empty() || fold_keys.is_empty() || train.len() <= fold_keys.len() * 2 {
             continue;
         }
-        let keys = &fold_keys;
         let mut p = params.clone();
         let penalty =
             stage.margins().map(|set| Penalty { set, grid: &ctx.grid, weight: Penalty::weight_for(train.len()) });
         // Warm start from the all-data solution: a few iterations reach the training optimum.
         let settings = crate::fit::StepSettings { max_iterations: 25, ..ctx.settings };
         match rep.anchor_weight {
-            Some(w) => crate::stages::mz_joint::refit_fold(ctx, &mut p, keys, &train, w, &settings)?,
+            Some(w) => crate::stages::mz_joint::refit_fold(ctx, &mut p, &fold_keys, &train, w, &settings)?,
             None => {
-                fit_step_with(stage.name(), &mut p, keys, &train.points, channel, scale, &settings, penalty)?;
+                fit_step_with(stage.name(), &mut p, &fold_keys, &train.points, channel, scale, &settings, penalty)?;
             }
         }
-        refits.push(crate::engine::values_of(&p, &rep.primary_keys));
+        refits.push(crate::engine::values_of(&p, keys));
         for pt in &test.points {
             let e = channel.eval(&p, &pt.input) - pt.measured;
             let e_fit = channel.eval(params, &pt.input) - pt.measured;
