@@ -48,6 +48,11 @@ pub struct Levels {
     pub pressures_pa: Vec<f64>,
     /// Camber levels (clustered to 0.5°), rad.
     pub cambers_rad: Vec<f64>,
+    /// The camber levels at which a slip is swept ([`SWEPT_SLIP_ANGLE_RAD`],
+    /// [`SWEPT_SLIP_RATIO`]), rad: a camber sweep at one held slip angle (camber stepped 0–4° at
+    /// 1.8°, as some rounds' cornering runs end) adds camber levels, but at one point of each
+    /// level's slip curve only.
+    pub swept_cambers_rad: Vec<f64>,
     /// Speed levels (clustered to 2 m/s), m/s.
     pub speeds_mps: Vec<f64>,
 }
@@ -95,13 +100,45 @@ fn clusters(values: impl Iterator<Item = f64>, tol: f64) -> Vec<f64> {
     out
 }
 
+/// Spread (5–95 % range) of the slip angle over a camber level's points above which the slip
+/// angle counts as swept there: a TTC cornering sweep reaches ±6–13°, the held slip angles of
+/// combined runs are 0, 3 and 6°; a camber sweep holds one.
+pub const SWEPT_SLIP_ANGLE_RAD: f64 = 3.0 * std::f64::consts::PI / 180.0;
+
+/// Spread of the slip ratio over a camber level's points above which it counts as swept there.
+pub const SWEPT_SLIP_RATIO: f64 = 0.05;
+
+/// Camber tolerance of a level, rad.
+const CAMBER_TOL_RAD: f64 = 0.5 * std::f64::consts::PI / 180.0;
+
+/// True when the slip angle or the slip ratio is swept among `points` at camber `gamma_rad`
+/// (within half the camber tolerance).
+fn slip_swept_at(points: &[Point], gamma_rad: f64) -> bool {
+    let at: Vec<&Point> =
+        points.iter().filter(|p| (p.input.gamma_rad - gamma_rad).abs() <= CAMBER_TOL_RAD / 2.0).collect();
+    let spread = |v: Vec<f64>| {
+        let mut v: Vec<f64> = v.into_iter().filter(|x| x.is_finite()).collect();
+        if v.len() < MIN_LEVEL_POINTS {
+            return 0.0;
+        }
+        v.sort_by(f64::total_cmp);
+        let q = |f: f64| v[((v.len() - 1) as f64 * f).round() as usize];
+        q(0.95) - q(0.05)
+    };
+    spread(at.iter().map(|p| p.input.alpha_rad).collect()) >= SWEPT_SLIP_ANGLE_RAD
+        || spread(at.iter().map(|p| p.input.kappa).collect()) >= SWEPT_SLIP_RATIO
+}
+
 impl Levels {
     /// The levels of `points`, with the nominal load `fz0_n` setting the load tolerance.
     pub fn of(points: &[Point], fz0_n: f64) -> Self {
+        let cambers_rad = clusters(points.iter().map(|p| p.input.gamma_rad), CAMBER_TOL_RAD);
+        let swept_cambers_rad = cambers_rad.iter().copied().filter(|&c| slip_swept_at(points, c)).collect();
         Levels {
             loads_n: clusters(points.iter().map(|p| p.input.fz_n), 0.08 * fz0_n.max(1.0)),
             pressures_pa: clusters(points.iter().map(|p| p.input.p_pa), 5e3),
-            cambers_rad: clusters(points.iter().map(|p| p.input.gamma_rad), 0.5f64.to_radians()),
+            cambers_rad,
+            swept_cambers_rad,
             speeds_mps: clusters(points.iter().map(|p| p.input.vx_mps), 2.0),
         }
     }
@@ -122,6 +159,11 @@ impl Levels {
                 self.cambers_rad.len(),
                 list(&self.cambers_rad, &|x| format!("{:.1} deg", x.to_degrees()))
             ),
+            Dim::SweptCamber => format!(
+                "{} camber level(s) with the slip swept ({}; camber sweeps at one slip angle do not count)",
+                self.swept_cambers_rad.len(),
+                list(&self.swept_cambers_rad, &|x| format!("{:.1} deg", x.to_degrees()))
+            ),
             Dim::Speed => format!(
                 "{} speed level(s) ({})",
                 self.speeds_mps.len(),
@@ -135,6 +177,7 @@ impl Levels {
             Dim::Load => self.loads_n.len(),
             Dim::Pressure => self.pressures_pa.len(),
             Dim::Camber => self.cambers_rad.len(),
+            Dim::SweptCamber => self.swept_cambers_rad.len(),
             Dim::Speed => self.speeds_mps.len(),
         }
     }
@@ -147,8 +190,13 @@ pub enum Dim {
     Load,
     /// Inflation pressure (dpi terms).
     Pressure,
-    /// Inclination angle (γ terms).
+    /// Inclination angle (γ terms), any level: terms a held slip angle shows (camber thrust
+    /// at small slip, the residual moment per camber).
     Camber,
+    /// Inclination angle at which the slip is swept: γ terms that shape the slip curve (its
+    /// peak, curvature, stiffness and shifts), which one point of the curve per camber cannot
+    /// tell from each other.
+    SweptCamber,
     /// Speed (Ω, V terms).
     Speed,
 }
@@ -166,23 +214,27 @@ pub fn need(key: &str) -> &'static [(Dim, usize)] {
         // Lateral, pure.
         "PDY2" | "PEY2" | "PHY2" | "PVY2" | "PKY2" => &[(Load, 2)],
         "PKY4" => &[(Load, 3)],
-        "PDY3" | "PEY4" | "PEY5" | "PKY3" | "PKY5" | "PKY6" | "PVY3" => &[(Camber, 2)],
-        "PKY7" | "PVY4" => &[(Camber, 2), (Load, 2)],
+        "PKY6" => &[(Camber, 2)],
+        "PKY7" => &[(Camber, 2), (Load, 2)],
+        "PDY3" | "PEY4" | "PEY5" | "PKY3" | "PKY5" | "PVY3" => &[(SweptCamber, 2)],
+        "PVY4" => &[(SweptCamber, 2), (Load, 2)],
         "PPY1" | "PPY3" => &[(Pressure, 2)],
         "PPY2" => &[(Pressure, 2), (Load, 2)],
         "PPY4" => &[(Pressure, 3)],
-        "PPY5" => &[(Pressure, 2), (Camber, 2)],
+        "PPY5" => &[(Pressure, 2), (SweptCamber, 2)],
         // Longitudinal, pure.
         "PDX2" | "PEX2" | "PKX2" | "PHX2" | "PVX2" => &[(Load, 2)],
         "PEX3" | "PKX3" => &[(Load, 3)],
-        "PDX3" => &[(Camber, 2)],
+        "PDX3" => &[(SweptCamber, 2)],
         "PPX1" | "PPX3" => &[(Pressure, 2)],
         "PPX2" | "PPX4" => &[(Pressure, 3)],
         // Aligning, pure.
         "QBZ2" | "QDZ2" | "QDZ7" | "QEZ2" | "QHZ2" => &[(Load, 2)],
         "QBZ3" | "QEZ3" => &[(Load, 3)],
-        "QBZ4" | "QBZ5" | "QDZ3" | "QDZ4" | "QDZ8" | "QDZ10" | "QEZ5" | "QHZ3" => &[(Camber, 2)],
-        "QDZ9" | "QDZ11" | "QHZ4" => &[(Camber, 2), (Load, 2)],
+        "QDZ8" => &[(Camber, 2)],
+        "QDZ9" => &[(Camber, 2), (Load, 2)],
+        "QBZ4" | "QBZ5" | "QDZ3" | "QDZ4" | "QDZ10" | "QEZ5" | "QHZ3" => &[(SweptCamber, 2)],
+        "QDZ11" | "QHZ4" => &[(SweptCamber, 2), (Load, 2)],
         "PPZ1" | "PPZ2" => &[(Pressure, 2)],
         // Combined.
         "REX2" | "REY2" | "RHY2" | "RVY2" => &[(Load, 2)],

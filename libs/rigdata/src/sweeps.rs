@@ -462,14 +462,15 @@ fn split_at_reach_changes(x: &[f64], (s, e): (usize, usize), on: f64) -> Vec<(us
     out
 }
 
-/// Largest gap [rows] between two one-sided halves that are one sweep.
-const HALF_SWEEP_GAP_ROWS: usize = 50;
+/// Largest gap [s] between two one-sided halves that are one sweep (in seconds: files come at
+/// 50 or 100 Hz).
+const HALF_SWEEP_GAP_S: f64 = 1.0;
 
 /// Joins back-to-back one-sided pieces of opposite sign and like reach (within
-/// [`LOBE_PEAK_RATIO`], at most [`HALF_SWEEP_GAP_ROWS`] apart) into one sweep: a sweep whose
-/// first half was counted with the tail of a different sweep before it (and split off again by
-/// [`split_at_reach_changes`]) comes back whole.
-fn join_halves(x: &[f64], pieces: Vec<(usize, usize)>, on: f64) -> Vec<(usize, usize)> {
+/// [`LOBE_PEAK_RATIO`], at most `max_gap_rows` apart: [`HALF_SWEEP_GAP_S`]) into one sweep: a
+/// sweep whose first half was counted with the tail of a different sweep before it (and split
+/// off again by [`split_at_reach_changes`]) comes back whole.
+fn join_halves(x: &[f64], pieces: Vec<(usize, usize)>, on: f64, max_gap_rows: usize) -> Vec<(usize, usize)> {
     let sides = |(a, b): (usize, usize)| {
         let w = &x[a..=b.min(x.len().saturating_sub(1))];
         let reach = w.iter().fold(0.0f64, |m, v| m.max(v.abs()));
@@ -485,7 +486,7 @@ fn join_halves(x: &[f64], pieces: Vec<(usize, usize)>, on: f64) -> Vec<(usize, u
             let (cp, cn, cr) = sides(p);
             let opposite = (pp && !pn && cn && !cp) || (pn && !pp && cp && !cn);
             let alike = pr.max(cr) <= LOBE_PEAK_RATIO * pr.min(cr);
-            if opposite && alike && p.0 <= prev.1 + HALF_SWEEP_GAP_ROWS {
+            if opposite && alike && p.0 <= prev.1 + max_gap_rows {
                 prev.1 = p.1;
                 last_one_sided = false;
                 continue;
@@ -701,7 +702,7 @@ pub fn find_sweeps(
                     .into_iter()
                     .flat_map(|ex| split_at_reach_changes(&sa_deg, ex, opt.sa_on_deg))
                     .collect();
-                for (f, l) in join_halves(&sa_deg, pieces, opt.sa_on_deg) {
+                for (f, l) in join_halves(&sa_deg, pieces, opt.sa_on_deg, rows_of(HALF_SWEEP_GAP_S)) {
                     raw.push((Swept::SlipAngle, f, l));
                 }
                 why[pa..pb].iter_mut().for_each(|w| *w = Some(Exclusion::SlipAngleChange));
@@ -712,7 +713,7 @@ pub fn find_sweeps(
                         .into_iter()
                         .flat_map(|ex| split_at_reach_changes(&sig.kappa, ex, kon))
                         .collect();
-                    for p in join_halves(&sig.kappa, pieces, kon) {
+                    for p in join_halves(&sig.kappa, pieces, kon, rows_of(HALF_SWEEP_GAP_S)) {
                         if kappa_source == KappaSource::EffectiveRadius && !driven(sig, p, opt.sr_driven_fx_fraction) {
                             sr_free.push(p);
                         } else {
@@ -894,7 +895,7 @@ mod tests {
             .into_iter()
             .flat_map(|p| split_at_reach_changes(&x, p, 1.0))
             .collect::<Vec<_>>();
-        let joined = join_halves(&x, pieces, 1.0);
+        let joined = join_halves(&x, pieces, 1.0, 50);
         assert_eq!(joined.len(), 2, "{joined:?}");
         assert!((75..=90).contains(&joined[0].1) && joined[1].1 == x.len() - 1, "{joined:?}");
         // A sweep whose sides reach alike (and noise near zero) stays whole.

@@ -340,3 +340,81 @@ fn sweeps_begun_on_a_cold_tyre_are_conditioning_where_their_cell_is_swept_again(
     let (_, db) = import_dat(&ttc_run(&FixtureSpec::drive_brake()), "db.dat");
     assert!(db.sweeps.iter().all(|s| s.conditioning_reason.as_deref() != Some(Conditioning::ColdStart.name())));
 }
+
+#[test]
+fn runs_sampled_at_100_hz_read_to_the_same_sweeps_as_at_50() {
+    // Newer rounds log at 100 Hz. Every planned sweep is found with its cell, kind and
+    // conditioning flag, and every row accounted for, as at 50 Hz: the reader's time
+    // thresholds are in seconds, not rows.
+    let specs = [
+        ("cornering", FixtureSpec::cornering()),
+        ("drive_brake", FixtureSpec::drive_brake()),
+        ("wander_no_settle", FixtureSpec { fz_wander: 0.2, no_settle_after_sweeps: true, ..FixtureSpec::cornering() }),
+        (
+            "older_round_camber",
+            FixtureSpec {
+                older_round: true,
+                fz_wander: 0.15,
+                camber_sweep: Some(CamberSweep { sa_deg: 1.8, cambers_deg: vec![0.0, 1.0, 2.0, 3.0, 4.0] }),
+                ..FixtureSpec::cornering()
+            },
+        ),
+        ("warmup", FixtureSpec { loads_n: vec![660.0, 1100.0], warmup_sweeps: 5, ..FixtureSpec::drive_brake() }),
+    ];
+    for (name, spec) in specs {
+        let at_50 = ttc_run(&spec);
+        let at_100 = ttc_run(&FixtureSpec { rate_hz: 100.0, ..spec });
+        assert!(at_100.table.rows() > at_50.table.rows() * 19 / 10, "{name}: {} rows", at_100.table.rows());
+        let (d50, r50) = import_dat(&at_50, &format!("{name}_50hz.dat"));
+        let (d100, r100) = import_dat(&at_100, &format!("{name}_100hz.dat"));
+        assert_found(&at_100, &d100, &r100);
+        assert_eq!(r100.conditioning_sweeps, r50.conditioning_sweeps, "{name}");
+        assert_eq!(d100.segments.len(), d50.segments.len(), "{name}");
+        // Twice the rows in sweeps, within a few per cent (edges are found to a sample).
+        let ratio = r100.rows_in_sweeps as f64 / r50.rows_in_sweeps as f64;
+        assert!((ratio - 2.0).abs() < 0.06, "{name}: rows in sweeps {} vs {}", r100.rows_in_sweeps, r50.rows_in_sweeps);
+    }
+}
+
+#[test]
+fn camber_sweeps_free_camber_terms_a_run_at_camber_0_holds() {
+    // An older round's cornering run at camber 0 whose only camber data are its camber sweeps
+    // (camber stepped 0–4° at 1.8° slip angle): the fitter's lateral stages take those sweeps,
+    // fit the camber terms that the same run without them holds for want of camber levels, and
+    // predict the tyre's cornering at 2° and 4° camber (a run the fit never saw) better.
+    let base = FixtureSpec { cambers_deg: vec![0.0], older_round: true, ..FixtureSpec::cornering() };
+    let camber = CamberSweep { sa_deg: 1.8, cambers_deg: vec![0.0, 1.0, 2.0, 3.0, 4.0] };
+    let opts = mffit::FitOptions { folds: 0, ..mffit::FitOptions::default() };
+    let (at_camber, _) =
+        import_dat(&ttc_run(&FixtureSpec { cambers_deg: vec![2.0, 4.0], ..base.clone() }), "cambered.dat");
+    let fit = |spec: &FixtureSpec, name: &str| {
+        let (d, _) = import_dat(&ttc_run(spec), name);
+        let r = mffit::fit(&d, &opts).unwrap();
+        assert!(r.nonphysical_stages().is_empty(), "{name}: {:?}", r.warnings);
+        let fy = r.stages.iter().find(|s| s.stage == "fy_pure").unwrap();
+        let held: Vec<(String, String)> = fy.held.iter().map(|h| (h.key.clone(), h.reason.clone())).collect();
+        let fitted: Vec<String> = fy.estimates.iter().map(|e| e.key.clone()).collect();
+        let on_camber =
+            mffit::stages::validate(&r, &at_camber, &opts).into_iter().find(|v| v.stage == "fy_pure").unwrap();
+        (fitted, held, on_camber.nrmse_pct)
+    };
+    let (_, held_without, camber_nrmse_without) = fit(&base, "camber0.dat");
+    let (fitted_with, held_with, camber_nrmse_with) =
+        fit(&FixtureSpec { camber_sweep: Some(camber), ..base.clone() }, "camber0_sweeps.dat");
+    // Camber thrust at small slip (what a sweep at one slip angle shows): fitted from them.
+    for k in ["PKY6", "PKY7"] {
+        assert!(held_without.iter().any(|(h, why)| h == k && why.contains("camber level")), "{k}: {held_without:?}");
+        assert!(fitted_with.iter().any(|f| f == k), "{k} not fitted from the camber sweeps: {fitted_with:?}");
+    }
+    // What shapes the slip curve with camber (its peak, curvature, shift) is not: one point of
+    // each camber's curve cannot tell those terms apart.
+    for k in ["PDY3", "PEY4", "PKY3", "PVY3"] {
+        let why =
+            held_with.iter().find(|(h, _)| h == k).map(|(_, w)| w.as_str()).unwrap_or_else(|| panic!("{k} fitted"));
+        assert!(why.contains("with the slip swept"), "{k}: {why}");
+    }
+    eprintln!(
+        "FY pure at cambers 2 and 4°: {camber_nrmse_without:.2} % without camber sweeps, {camber_nrmse_with:.2} % with"
+    );
+    assert!(camber_nrmse_with < 0.8 * camber_nrmse_without, "{camber_nrmse_with} vs {camber_nrmse_without}");
+}

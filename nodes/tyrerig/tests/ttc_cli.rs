@@ -197,3 +197,51 @@ fn inspect_reads_every_quirk_fixture_and_accounts_for_every_row() {
         assert_eq!(found, planned, "{}: {}", q.file, q.quirk);
     }
 }
+
+/// An older round's pair as a user would fit it: the cornering/camber run (no `SL`, `SR` not a
+/// slip ratio, the load wandering ±15 %, camber sweeps) with its pure longitudinal run to ±0.65
+/// read from `SR` alone. On real files of such a round the fit was non-physical (Dy/Fz −0.007,
+/// exit 3); here it must be physical (exit 0), with the lateral, aligning and longitudinal
+/// stages fitted close to the data.
+#[test]
+fn an_older_rounds_pair_fits_a_physical_model() {
+    let dir = scratch("older_round_fit");
+    tyrerig(&["export", "quirk-fixtures", dir.to_str().unwrap()]);
+    let report = dir.join("report");
+    let tir = dir.join("older_round.tir");
+    tyrerig(&[
+        "fit",
+        dir.join("older_round_cornering_camber.dat").to_str().unwrap(),
+        dir.join("older_round_pure_longitudinal_065.dat").to_str().unwrap(),
+        "--folds",
+        "3",
+        "--out",
+        tir.to_str().unwrap(),
+        "--report",
+        report.to_str().unwrap(),
+    ]);
+    let fit: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(report.join("fit.json")).unwrap()).unwrap();
+    assert!(fit["nonphysical_stages"].as_array().unwrap().is_empty(), "{}", fit["warnings"]);
+    let stage = |name: &str| {
+        fit["stages"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .find(|s| s["stage"] == name)
+            .unwrap_or_else(|| panic!("{name}"))
+            .clone()
+    };
+    for (name, most_pct) in [("fy_pure", 2.0), ("mz_pure", 6.0), ("fx_pure", 4.0)] {
+        let s = stage(name);
+        let (fit_pct, held_out_pct) = (s["nrmse_pct"].as_f64().unwrap(), s["heldout_nrmse_pct"].as_f64());
+        eprintln!("{name}: {} points, {fit_pct:.2} % fit, held out {held_out_pct:?}", s["points"]);
+        assert!(fit_pct < most_pct, "{name}: {fit_pct} %");
+    }
+    // The camber sweeps give camber thrust; the curve's camber shape stays held.
+    let fy = stage("fy_pure");
+    let fitted: Vec<&str> = fy["coefficients"].as_array().unwrap().iter().filter_map(|c| c["key"].as_str()).collect();
+    assert!(fitted.contains(&"PKY6"), "{fitted:?}");
+    let held: Vec<&str> = fy["held"].as_array().unwrap().iter().filter_map(|h| h["key"].as_str()).collect();
+    assert!(held.contains(&"PDY3") && held.contains(&"PVY3"), "{held:?}");
+}

@@ -33,14 +33,15 @@ pub fn cornering(seg: &Segment, ctx: &Ctx) -> bool {
 }
 
 /// Pure-lateral points of `measured` for the lateral stages: cornering sweeps; and — when those
-/// hold fewer than two cambers, or are too few — the samples of slip-ratio sweeps where the
+/// hold fewer than two cambers with the slip angle swept (a camber sweep at one slip angle does
+/// not count), or are too few — the samples of slip-ratio sweeps where the
 /// wheel is not driven or braked (|κ| < [`PURE_KAPPA`] and |FX| < 3 % of FZ; their κ set to 0).
 /// A drive/brake/combined run is often the only data a test has at other cambers. Both
 /// conditions matter: at a fast sweep's zero crossing the tread's slip lags the rim's, and the
 /// force says where the tread really is.
 pub fn lateral_points(ctx: &Ctx, measured: fn(&Sample) -> f64, max: usize) -> StagePoints {
     let sel = ctx.points(|s| cornering(s, ctx), |_| true, measured, usize::MAX);
-    let cambers = Levels::of(&sel.points, ctx.nominal.fz0_n).cambers_rad.len();
+    let cambers = Levels::of(&sel.points, ctx.nominal.fz0_n).swept_cambers_rad.len();
     if cambers >= 2 && sel.len() >= 50 {
         return sel.decimated(max);
     }

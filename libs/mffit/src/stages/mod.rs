@@ -109,9 +109,9 @@ const WARM_WORSENING_PCT: f64 = 0.25;
 pub struct WarmStart {
     /// The previous fit's parameters.
     pub params: TyreParams,
-    /// The stages that previous fit fitted, with the number of load, pressure, camber and speed
-    /// levels in their points.
-    pub stages: Vec<(String, [usize; 4])>,
+    /// The stages that previous fit fitted, with the number of load, pressure, camber, speed
+    /// and swept-camber levels in their points.
+    pub stages: Vec<(String, [usize; 5])>,
     /// Per stage, the previous report, the signature of its points and the values it set:
     /// a stage whose points are unchanged, after stages that were all unchanged too, is taken
     /// over as it was instead of being refitted.
@@ -224,8 +224,9 @@ impl WarmStart {
             .filter(|v| v.is_finite())
     }
 
-    /// The most levels (loads, pressures, cambers, speeds) the previous solutions of `stage` saw.
-    fn levels_seen(&self, stage: &str) -> Option<[usize; 4]> {
+    /// The most levels (loads, pressures, cambers, speeds, swept cambers) the previous solutions
+    /// of `stage` saw.
+    fn levels_seen(&self, stage: &str) -> Option<[usize; 5]> {
         self.stages.iter().find(|(s, _)| s == stage).map(|(_, n)| *n)
     }
 }
@@ -270,8 +271,8 @@ fn signature(points: &[crate::engine::Point]) -> u64 {
     h.finish()
 }
 
-fn level_counts(l: &Levels) -> [usize; 4] {
-    [l.loads_n.len(), l.pressures_pa.len(), l.cambers_rad.len(), l.speeds_mps.len()]
+fn level_counts(l: &Levels) -> [usize; 5] {
+    [l.loads_n.len(), l.pressures_pa.len(), l.cambers_rad.len(), l.speeds_mps.len(), l.swept_cambers_rad.len()]
 }
 
 impl Default for FitOptions {
@@ -767,7 +768,7 @@ pub fn key_values(params: &TyreParams, keys: &[&'static str]) -> Vec<(&'static s
 mod tests {
     use super::*;
 
-    fn warm(stages: &[(&str, [usize; 4])], fresh: &[(&str, f64)]) -> WarmStart {
+    fn warm(stages: &[(&str, [usize; 5])], fresh: &[(&str, f64)]) -> WarmStart {
         WarmStart {
             params: TyreParams::from_tir_str(TEMPLATE_TIR, "template").expect("the template parses"),
             stages: stages.iter().map(|(s, n)| (s.to_string(), *n)).collect(),
@@ -779,21 +780,27 @@ mod tests {
         }
     }
 
-    fn levels(n: [usize; 4]) -> Levels {
+    fn levels(n: [usize; 5]) -> Levels {
         let v = |k: usize| (0..k).map(|i| i as f64).collect();
-        Levels { loads_n: v(n[0]), pressures_pa: v(n[1]), cambers_rad: v(n[2]), speeds_mps: v(n[3]) }
+        Levels {
+            loads_n: v(n[0]),
+            pressures_pa: v(n[1]),
+            cambers_rad: v(n[2]),
+            speeds_mps: v(n[3]),
+            swept_cambers_rad: v(n[4]),
+        }
     }
 
     #[test]
     fn a_warm_start_admits_flickering_levels_but_not_a_level_that_frees_a_coefficient() {
-        let older = warm(&[("fy_pure", [7, 2, 1, 1])], &[("fy_pure", 0.8)]);
+        let older = warm(&[("fy_pure", [7, 2, 1, 1, 1])], &[("fy_pure", 0.8)]);
         // The newer solution saw fewer loads (decimation, a level under the point threshold).
-        let w = warm(&[("fy_pure", [5, 2, 1, 1])], &[]).remembering(Some(&older));
-        assert!(w.admits("fy_pure", &levels([6, 2, 1, 1])));
-        assert!(w.admits("fy_pure", &levels([16, 2, 1, 1])), "a 16th load frees nothing");
-        assert!(!w.admits("fy_pure", &levels([5, 3, 1, 1])), "a third pressure frees PPY4");
-        assert!(!w.admits("fy_pure", &levels([5, 2, 2, 1])), "a second camber frees the camber terms");
-        assert!(!w.admits("mz_pure", &levels([1, 1, 1, 1])), "a stage never fitted starts fresh");
+        let w = warm(&[("fy_pure", [5, 2, 1, 1, 1])], &[]).remembering(Some(&older));
+        assert!(w.admits("fy_pure", &levels([6, 2, 1, 1, 1])));
+        assert!(w.admits("fy_pure", &levels([16, 2, 1, 1, 1])), "a 16th load frees nothing");
+        assert!(!w.admits("fy_pure", &levels([5, 3, 1, 1, 1])), "a third pressure frees PPY4");
+        assert!(!w.admits("fy_pure", &levels([5, 2, 2, 1, 2])), "a second camber frees the camber terms");
+        assert!(!w.admits("mz_pure", &levels([1, 1, 1, 1, 1])), "a stage never fitted starts fresh");
         // The reference a warm start is held to is the latest fresh fit's, remembered.
         assert_eq!(w.reference_nrmse_pct("fy_pure"), Some(0.8));
         assert_eq!(w.reference_nrmse_pct("mz_pure"), None);
