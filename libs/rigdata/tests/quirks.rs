@@ -360,6 +360,8 @@ fn runs_sampled_at_100_hz_read_to_the_same_sweeps_as_at_50() {
             },
         ),
         ("warmup", FixtureSpec { loads_n: vec![660.0, 1100.0], warmup_sweeps: 5, ..FixtureSpec::drive_brake() }),
+        // Cornering at cambers from −1 to 4°, as some rounds run it.
+        ("cambers_minus1_to_4", FixtureSpec { cambers_deg: vec![-1.0, 0.0, 2.0, 4.0], ..FixtureSpec::cornering() }),
     ];
     for (name, spec) in specs {
         let at_50 = ttc_run(&spec);
