@@ -2,7 +2,7 @@
 
 use crate::DoctorError;
 use crate::data::Dataset;
-use crate::diagnose::{CandidateScore, Diagnosis, NamedEffect};
+use crate::diagnose::{CandidateScore, Diagnosis, NamedEffect, p_text};
 use crate::effects::{CH_FX, CH_FY, CH_MZ, CH_RL, CHANNELS, EffectParams};
 use crate::extension::extended_params;
 use mftyre::TyreParams;
@@ -213,11 +213,11 @@ pub fn markdown(
         let ru = n.runner_up.map_or("none".to_owned(), |(e, v)| format!("{} ({:.3})", e.name(), v));
         let _ = writeln!(
             m,
-            "{}. **{}** — evidence {:.3}, bootstrap p {:.4} (runner-up {ru}); main channel {}; held-out RMS in its region {} → {} ({:.0} % less).",
+            "{}. **{}** — evidence {:.3}, bootstrap p {} (runner-up {ru}); main channel {}; held-out RMS in its region {} → {} ({:.0} % less).",
             i + 1,
             n.effect.name(),
             n.evidence,
-            n.p_value,
+            p_text(n.p_value),
             n.channel,
             fmt_rms(n.rms_before_heldout, ch),
             fmt_rms(n.rms_after_heldout, ch),
@@ -356,11 +356,11 @@ pub fn markdown(
             };
             let _ = writeln!(
                 m,
-                "| {} | {fam} | {} | {:.4} | {:.4} ({:.4}) | {}/{} | {:.0} → {:.0} | {note} |",
+                "| {} | {fam} | {} | {:.4} | {} ({:.4}) | {}/{} | {:.0} → {:.0} | {note} |",
                 c.effect.name(),
                 c.n_params,
                 c.evidence,
-                c.p_value,
+                p_text(c.p_value),
                 c.p_needed,
                 c.folds_improved,
                 c.folds,
@@ -380,11 +380,11 @@ pub fn markdown(
             let verdict = if s.significant { "significant".to_owned() } else { s.reason.clone() };
             let _ = writeln!(
                 m,
-                "| {} | {} | {:.4} | {:.4} | {}/{} | {verdict} |",
+                "| {} | {} | {:.4} | {} | {}/{} | {verdict} |",
                 s.effect.name(),
                 beside.join(", "),
                 s.evidence,
-                s.p_value,
+                p_text(s.p_value),
                 s.folds_improved,
                 s.folds
             );

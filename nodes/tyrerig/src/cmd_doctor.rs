@@ -49,6 +49,10 @@ pub struct DoctorArgs {
     /// sweeps show at the same operating point): `auto` = on with --fit, off with --model
     #[arg(long, value_enum, default_value_t = FormCorrection::Auto)]
     form_correction: FormCorrection,
+    /// Resamples of the block bootstrap over sweeps that decides whether a gain is consistent
+    /// (default: the doctor's)
+    #[arg(long)]
+    bootstrap_resamples: Option<usize>,
 }
 
 /// When the doctor separates the model's form error from state effects.
@@ -130,6 +134,7 @@ pub fn run(args: DoctorArgs) -> Result<()> {
             FormCorrection::On => true,
             FormCorrection::Off => false,
         },
+        bootstrap_resamples: args.bootstrap_resamples.unwrap_or(DoctorConfig::default().bootstrap_resamples),
         ..DoctorConfig::default()
     };
     for nd in &cfg.not_diagnosed {
@@ -149,11 +154,11 @@ pub fn run(args: DoctorArgs) -> Result<()> {
             (doctor::Family::FormError, _) => "form error".to_owned(),
         };
         println!(
-            "{}. {} [{family}] (evidence {:.3}, p {:.4}; runner-up {}): {} RMS in its region {:.4} → {:.4} held-out, {:.4} → {:.4} fit",
+            "{}. {} [{family}] (evidence {:.3}, p {}; runner-up {}): {} RMS in its region {:.4} → {:.4} held-out, {:.4} → {:.4} fit",
             i + 1,
             n.effect.name(),
             n.evidence,
-            n.p_value,
+            doctor::diagnose::p_text(n.p_value),
             n.runner_up.map_or("none".to_owned(), |(e, v)| format!("{} {:.3}", e.name(), v)),
             n.channel,
             n.rms_before_heldout,
