@@ -245,3 +245,40 @@ fn an_older_rounds_pair_fits_a_physical_model() {
     let held: Vec<&str> = fy["held"].as_array().unwrap().iter().filter_map(|h| h["key"].as_str()).collect();
     assert!(held.contains(&"PDY3") && held.contains(&"PVY3"), "{held:?}");
 }
+
+/// A cornering run and a drive/brake run that name two tyres (two specimens of one model, as
+/// TTC rounds often are) are fitted as one tyre, with a warning that says so; files naming one
+/// tyre get none.
+#[test]
+fn files_naming_two_tyres_are_fitted_with_a_specimen_warning() {
+    let dir = scratch("two_specimens");
+    tyrerig(&["export", "quirk-fixtures", dir.to_str().unwrap()]);
+    let cornering = dir.join("cold_start_cornering.dat");
+    let drive = dir.join("warmup_drive_brake.dat");
+    let text = std::fs::read_to_string(&drive).unwrap();
+    assert!(text.contains("Tire_Name=Fixture"), "{}", &text[..200]);
+    let other = dir.join("warmup_drive_brake_tire21.dat");
+    std::fs::write(&other, text.replacen("Tire_Name=Fixture", "Tire_Name=Tire 21", 1)).unwrap();
+    let warnings = |drive: &Path, name: &str| {
+        let report = dir.join(name);
+        tyrerig(&[
+            "fit",
+            cornering.to_str().unwrap(),
+            drive.to_str().unwrap(),
+            "--folds",
+            "0",
+            "--out",
+            dir.join(format!("{name}.tir")).to_str().unwrap(),
+            "--report",
+            report.to_str().unwrap(),
+        ]);
+        let fit: serde_json::Value =
+            serde_json::from_str(&std::fs::read_to_string(report.join("fit.json")).unwrap()).unwrap();
+        fit["warnings"].as_array().unwrap().iter().map(|w| w.as_str().unwrap().to_owned()).collect::<Vec<_>>()
+    };
+    let two = warnings(&other, "two");
+    let w = two.iter().find(|w| w.contains("the files name 2 tyres")).unwrap_or_else(|| panic!("{two:?}"));
+    assert!(w.contains("\"Tire 21 ") && w.contains("fitted as one tyre"), "{w}");
+    let one = warnings(&drive, "one");
+    assert!(!one.iter().any(|w| w.contains("tyres (")), "{one:?}");
+}
