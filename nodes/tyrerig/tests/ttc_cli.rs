@@ -198,6 +198,16 @@ fn inspect_reads_every_quirk_fixture_and_accounts_for_every_row() {
     }
 }
 
+/// `tyrerig fit FILES --folds F --out OUT.tir --report OUT/`, and its `fit.json`.
+fn fit_json(files: &[PathBuf], folds: usize, out: &Path) -> serde_json::Value {
+    let (tir, folds) = (out.with_extension("tir"), folds.to_string());
+    let mut args: Vec<&str> = vec!["fit"];
+    args.extend(files.iter().map(|f| f.to_str().unwrap()));
+    args.extend(["--folds", &folds, "--out", tir.to_str().unwrap(), "--report", out.to_str().unwrap()]);
+    tyrerig(&args);
+    serde_json::from_str(&std::fs::read_to_string(out.join("fit.json")).unwrap()).unwrap()
+}
+
 /// An older round's pair as a user would fit it: the cornering/camber run (no `SL`, `SR` not a
 /// slip ratio, the load wandering ±15 %, camber sweeps) with its pure longitudinal run to ±0.65
 /// read from `SR` alone. On real files of such a round the fit was non-physical (Dy/Fz −0.007,
@@ -207,21 +217,8 @@ fn inspect_reads_every_quirk_fixture_and_accounts_for_every_row() {
 fn an_older_rounds_pair_fits_a_physical_model() {
     let dir = scratch("older_round_fit");
     tyrerig(&["export", "quirk-fixtures", dir.to_str().unwrap()]);
-    let report = dir.join("report");
-    let tir = dir.join("older_round.tir");
-    tyrerig(&[
-        "fit",
-        dir.join("older_round_cornering_camber.dat").to_str().unwrap(),
-        dir.join("older_round_pure_longitudinal_065.dat").to_str().unwrap(),
-        "--folds",
-        "3",
-        "--out",
-        tir.to_str().unwrap(),
-        "--report",
-        report.to_str().unwrap(),
-    ]);
-    let fit: serde_json::Value =
-        serde_json::from_str(&std::fs::read_to_string(report.join("fit.json")).unwrap()).unwrap();
+    let files = [dir.join("older_round_cornering_camber.dat"), dir.join("older_round_pure_longitudinal_065.dat")];
+    let fit = fit_json(&files, 3, &dir.join("older_round"));
     assert!(fit["nonphysical_stages"].as_array().unwrap().is_empty(), "{}", fit["warnings"]);
     let stage = |name: &str| {
         fit["stages"]
@@ -260,20 +257,7 @@ fn files_naming_two_tyres_are_fitted_with_a_specimen_warning() {
     let other = dir.join("warmup_drive_brake_tire21.dat");
     std::fs::write(&other, text.replacen("Tire_Name=Fixture", "Tire_Name=Tire 21", 1)).unwrap();
     let warnings = |drive: &Path, name: &str| {
-        let report = dir.join(name);
-        tyrerig(&[
-            "fit",
-            cornering.to_str().unwrap(),
-            drive.to_str().unwrap(),
-            "--folds",
-            "0",
-            "--out",
-            dir.join(format!("{name}.tir")).to_str().unwrap(),
-            "--report",
-            report.to_str().unwrap(),
-        ]);
-        let fit: serde_json::Value =
-            serde_json::from_str(&std::fs::read_to_string(report.join("fit.json")).unwrap()).unwrap();
+        let fit = fit_json(&[cornering.clone(), drive.to_path_buf()], 0, &dir.join(name));
         fit["warnings"].as_array().unwrap().iter().map(|w| w.as_str().unwrap().to_owned()).collect::<Vec<_>>()
     };
     let two = warnings(&other, "two");
