@@ -37,6 +37,11 @@ pub struct StageJson {
     pub wall_s: f64,
     /// k-fold held-out NRMSE over sweeps, % of peak (None when not cross-validated).
     pub heldout_nrmse_pct: Option<f64>,
+    /// The band for a repeat run, channel units: ± this holds 95 % of held-out errors
+    /// (`crossval::repeat_band`; None when not cross-validated).
+    pub repeat_band_95: Option<f64>,
+    /// % of held-out points inside the in-sample ±1.96·RMSE band.
+    pub fit_band_heldout_pct: Option<f64>,
     /// Fitted coefficients with their standard deviations.
     pub coefficients: Vec<crate::identify::Estimate>,
     /// Coefficients left at their template (or start) values, and why.
@@ -84,6 +89,8 @@ pub fn write(dir: &Path, result: &FitResult, accuracy: Option<&[AccuracyRow]>) -
                 points: m.points,
                 wall_s: s.wall_s,
                 heldout_nrmse_pct: s.heldout.as_ref().map(|h| h.nrmse_pct),
+                repeat_band_95: s.heldout.as_ref().map(|h| h.repeat_band).filter(|b| b.is_finite()),
+                fit_band_heldout_pct: s.heldout.as_ref().map(|h| h.fit_band_heldout_pct),
                 coefficients: s.estimates.clone(),
                 held: s.held.clone(),
                 nonphysical: s.nonphysical.clone(),
@@ -192,6 +199,7 @@ fn markdown(
             }
         }
     }
+    write_repeat_bands(&mut s, result, stages);
     let _ = writeln!(s, "\n## Notes per stage\n");
     for st in &result.stages {
         if let Some(r) = &st.skipped {
@@ -236,16 +244,26 @@ fn markdown(
     }
     if !result.validation.is_empty() {
         let _ = writeln!(s, "\n## Validation on other runs\n");
-        let _ = writeln!(s, "The fitted model as it is, on the same stage selections of another run.\n");
+        let _ = writeln!(
+            s,
+            "The fitted model as it is, on the same stage selections of another run. *In band* checks the band for a \
+             repeat run (above): the share of this run's points within ±band of the model, predicted {:.0} %.\n",
+            100.0 * crate::stages::crossval::REPEAT_BAND_LEVEL
+        );
         for (src, rows) in &result.validation {
             let _ = writeln!(
                 s,
-                "**{src}**\n\n| stage | channel | points | RMSE | NRMSE % | bias |\n|---|---|---|---|---|---|"
+                "**{src}**\n\n| stage | channel | points | RMSE | NRMSE % | bias | band ± | in band % |\n\
+                 |---|---|---|---|---|---|---|---|"
             );
             for r in rows {
+                let (band, inside) = match (r.repeat_band, r.in_repeat_band_pct) {
+                    (Some(b), Some(p)) => (format!("{b:.4}"), format!("{p:.1}")),
+                    _ => ("–".into(), "–".into()),
+                };
                 let _ = writeln!(
                     s,
-                    "| {} | {} | {} | {:.4} | {:.2} | {:.4} |",
+                    "| {} | {} | {} | {:.4} | {:.2} | {:.4} | {band} | {inside} |",
                     r.stage, r.channel, r.points, r.rmse, r.nrmse_pct, r.bias
                 );
             }
@@ -323,4 +341,43 @@ fn markdown(
         let _ = writeln!(s, "- {}: ![{}]({}.png) ([svg]({}.svg))", p.title, p.stem, p.stem, p.stem);
     }
     s
+}
+
+/// The report's "band for a repeat run" section: per cross-validated stage, the half-width that
+/// holds 95 % of the held-out errors and what the in-sample ±1.96·RMSE band holds of them.
+fn write_repeat_bands(s: &mut String, result: &FitResult, stages: &[StageJson]) {
+    let rows: Vec<&StageJson> = stages.iter().filter(|j| j.repeat_band_95.is_some()).collect();
+    if rows.is_empty() {
+        return;
+    }
+    let _ = writeln!(s, "\n## Band for a repeat run\n");
+    let _ = writeln!(
+        s,
+        "A new sweep of this tyre on this plan is predicted to fall within ±band of the model at {:.0} % of its \
+         points: the band is the {:.0} % rank of the errors on held-out sweeps (each point predicted by a fit that \
+         never saw its sweep: noise, form error and the coefficients' spread together). It is one width per stage, so \
+         it is wider than needed where the model is good and narrower where it is poor. A second specimen of the \
+         same tyre model is not this tyre (real pairs differ by 10–14 % in peak force): check it with `--validate`. \
+         The last column is what the usual in-sample band ±1.96·RMSE holds of the held-out points.\n",
+        100.0 * crate::stages::crossval::REPEAT_BAND_LEVEL,
+        100.0 * crate::stages::crossval::REPEAT_BAND_LEVEL,
+    );
+    let _ = writeln!(s, "| stage | channel | band ± | band, % of peak | ±1.96·RMSE holds, % |\n|---|---|---|---|---|");
+    for j in rows {
+        let band = j.repeat_band_95.unwrap_or(f64::NAN);
+        let peak = result
+            .stages
+            .iter()
+            .find(|r| r.stage == j.stage)
+            .and_then(|r| r.heldout.as_ref())
+            .map_or(f64::NAN, |h| h.peak);
+        let _ = writeln!(
+            s,
+            "| {} | {} | {band:.4} | {:.2} | {} |",
+            j.stage,
+            j.channel,
+            100.0 * band / peak,
+            j.fit_band_heldout_pct.map_or_else(|| "–".into(), |p| format!("{p:.1}"))
+        );
+    }
 }

@@ -4,6 +4,7 @@ use std::path::{Path, PathBuf};
 
 use anyhow::{Context, Result, bail};
 use clap::Args;
+use mffit::stages::crossval::REPEAT_BAND_LEVEL;
 use mffit::stages::{FitOptions, fit};
 use mftyre::TyreParams;
 
@@ -177,13 +178,20 @@ pub fn run(args: FitArgs) -> Result<()> {
             ),
         }
     }
+    print_repeat_bands(&result);
     for v in &args.validate {
         let other = read_any(v).with_context(|| format!("reading {} (--validate)", v.display()))?;
         let rows = mffit::stages::validate(&result, &other.dataset, &opts);
         eprintln!("validation on {}:", v.display());
         for r in &rows {
+            let band = match (r.repeat_band, r.in_repeat_band_pct) {
+                (Some(b), Some(p)) => {
+                    format!(", {p:.1} % within ±{b:.4} (predicted {:.0} %)", 100.0 * REPEAT_BAND_LEVEL)
+                }
+                _ => String::new(),
+            };
             eprintln!(
-                "  {:<18} {:>6} pts  NRMSE {:>6.2} %  (rmse {:.4}, bias {:+.4})",
+                "  {:<18} {:>6} pts  NRMSE {:>6.2} %  (rmse {:.4}, bias {:+.4}){band}",
                 r.stage, r.points, r.nrmse_pct, r.rmse, r.bias
             );
         }
@@ -248,4 +256,21 @@ pub fn run(args: FitArgs) -> Result<()> {
         eprintln!("warning: non-physical model accepted (--allow-nonphysical)");
     }
     Ok(())
+}
+
+/// The band each cross-validated stage predicts for a repeat run (`crossval::repeat_band`).
+fn print_repeat_bands(result: &mffit::stages::FitResult) {
+    let bands: Vec<String> = result
+        .stages
+        .iter()
+        .filter_map(|s| s.heldout.as_ref().filter(|h| h.repeat_band.is_finite()).map(|h| (s, h)))
+        .map(|(s, h)| format!("{} ±{:.4} ({:.2} % of peak)", s.stage, h.repeat_band, 100.0 * h.repeat_band / h.peak))
+        .collect();
+    if !bands.is_empty() {
+        eprintln!(
+            "band for a repeat run ({:.0} % of held-out errors within): {}",
+            100.0 * REPEAT_BAND_LEVEL,
+            bands.join(", ")
+        );
+    }
 }

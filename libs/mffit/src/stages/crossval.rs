@@ -39,8 +39,17 @@ pub struct HeldOut {
     pub rmse: f64,
     /// The same in % of the stage's peak |measured|.
     pub nrmse_pct: f64,
+    /// The stage's peak |measured|, channel units (what the % are of).
+    pub peak: f64,
     /// RMS of the all-data fit's errors on the same points, % of peak (for comparison).
     pub fit_nrmse_pct: f64,
+    /// The band for a repeat run, channel units: the half-width ±b that holds
+    /// [`REPEAT_BAND_LEVEL`] of the held-out errors ([`repeat_band`]). A new sweep of this
+    /// tyre on this plan falls within ±b of the model at that rate; another specimen need not.
+    pub repeat_band: f64,
+    /// % of the held-out points inside the in-sample band ±1.96·RMSE of the all-data fit: what
+    /// the usual "RMSE band" holds on sweeps the fit never saw.
+    pub fit_band_heldout_pct: f64,
     /// Per fitted key (the stage's `primary_keys`, in order), 1σ of the grouped jackknife over
     /// the folds: √((k−1)/k · Σ (θ_f − θ̄)²) of the k refits that each left out one fold of
     /// sweeps.
@@ -72,6 +81,7 @@ pub fn kfold(
     let mut se = 0.0;
     let mut se_fit = 0.0;
     let mut n = 0usize;
+    let mut abs_errors = Vec::new();
     let mut refits: Vec<Vec<f64>> = Vec::with_capacity(k);
     for f in 0..k {
         let train = sel.by_group(|g| fold_of(g) != f);
@@ -104,6 +114,7 @@ pub fn kfold(
                 se += e * e;
                 se_fit += e_fit * e_fit;
                 n += 1;
+                abs_errors.push(e.abs());
             }
         }
     }
@@ -111,15 +122,44 @@ pub fn kfold(
         return Ok(None);
     }
     let rmse = (se / n as f64).sqrt();
+    let fit_rmse = (se_fit / n as f64).sqrt();
+    let fit_band_heldout_pct =
+        100.0 * abs_errors.iter().filter(|&&e| e <= FIT_BAND_SIGMAS * fit_rmse).count() as f64 / n as f64;
     Ok(Some(HeldOut {
         folds: k,
         sweeps: groups.len(),
         points: n,
         rmse,
         nrmse_pct: 100.0 * rmse / peak,
-        fit_nrmse_pct: 100.0 * (se_fit / n as f64).sqrt() / peak,
+        peak,
+        fit_nrmse_pct: 100.0 * fit_rmse / peak,
+        repeat_band: repeat_band(abs_errors),
+        fit_band_heldout_pct,
         jackknife_std: jackknife_std(&refits, keys.len()),
     }))
+}
+
+/// The share of a repeat run the band [`HeldOut::repeat_band`] is made to hold.
+pub const REPEAT_BAND_LEVEL: f64 = 0.95;
+
+/// Half-width of the usual in-sample band, in RMSEs (±1.96·RMSE: 95 % for Gaussian errors).
+pub const FIT_BAND_SIGMAS: f64 = 1.96;
+
+/// The half-width that holds [`REPEAT_BAND_LEVEL`] of held-out errors: their ⌈level·(n + 1)⌉-th
+/// smallest |error| (the split-conformal rank: for a new point exchangeable with the held-out
+/// ones it holds at least the level). Every held-out point was predicted by a fit that never saw
+/// its sweep, so the band counts the noise, the form error and the coefficients' spread over
+/// sweeps together, as a repeat run will meet them. It is one width for the stage's whole
+/// selection: wider than needed where the model is good, narrower where it is poor.
+pub fn repeat_band(mut abs_errors: Vec<f64>) -> f64 {
+    abs_errors.retain(|e| e.is_finite());
+    if abs_errors.is_empty() {
+        return f64::NAN;
+    }
+    abs_errors.sort_by(f64::total_cmp);
+    let n = abs_errors.len();
+    let rank = (REPEAT_BAND_LEVEL * (n + 1) as f64).ceil() as usize;
+    abs_errors[rank.clamp(1, n) - 1]
 }
 
 /// √((k−1)/k · Σ_f (θ_f − θ̄)²) per key over `refits` (k rows of `n` values); NaN with fewer
@@ -146,6 +186,23 @@ mod tests {
         let s = super::jackknife_std(&[vec![1.0], vec![2.0], vec![3.0]], 1);
         assert!((s[0] - (4.0f64 / 3.0).sqrt()).abs() < 1e-12);
         assert!(super::jackknife_std(&[vec![1.0]], 1)[0].is_nan());
+    }
+
+    #[test]
+    fn the_repeat_band_is_the_conformal_rank_of_the_held_out_errors() {
+        // n = 100: the ⌈0.95·101⌉ = 96th smallest; n = 19: the 19th (all of them).
+        assert_eq!(super::repeat_band((1..=100).rev().map(f64::from).collect()), 96.0);
+        assert_eq!(super::repeat_band((1..=19).map(f64::from).collect()), 19.0);
+        assert_eq!(super::repeat_band(vec![f64::NAN, 2.0]), 2.0);
+        assert!(super::repeat_band(Vec::new()).is_nan());
+        // Gaussian errors of σ 1: the band is 1.96 (within the quantile's sampling error).
+        use rand::SeedableRng;
+        use rand_distr::Distribution;
+        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(7);
+        let normal = rand_distr::Normal::new(0.0, 1.0).unwrap();
+        let e: Vec<f64> = (0..20_000).map(|_| f64::abs(normal.sample(&mut rng))).collect();
+        let b = super::repeat_band(e);
+        assert!((b - 1.96).abs() < 0.05, "{b}");
     }
 }
 
@@ -176,6 +233,12 @@ pub struct ValidationRow {
     pub nrmse_pct: f64,
     /// Mean error (model − measured), channel units.
     pub bias: f64,
+    /// The stage's band for a repeat run (from its held-out sweeps, [`HeldOut::repeat_band`]),
+    /// channel units; `None` without cross-validation.
+    pub repeat_band: Option<f64>,
+    /// % of this run's points inside ±`repeat_band`: the check of the predicted
+    /// [`REPEAT_BAND_LEVEL`].
+    pub in_repeat_band_pct: Option<f64>,
 }
 
 /// The fitted model of `result` on `other` (e.g. a repeat run): per stage that was fitted, the
@@ -199,13 +262,21 @@ pub fn validate(result: &FitResult, other: &Dataset, opts: &FitOptions) -> Vec<V
             continue;
         }
         let channel: Channel = stage.channel();
-        let (mut se, mut sum, mut n) = (0.0, 0.0, 0usize);
+        let repeat_band = result
+            .stages
+            .iter()
+            .find(|r| r.stage == stage.name())
+            .and_then(|r| r.heldout.as_ref())
+            .map(|h| h.repeat_band)
+            .filter(|b| b.is_finite());
+        let (mut se, mut sum, mut n, mut inside) = (0.0, 0.0, 0usize, 0usize);
         for p in &sel.points {
             let e = channel.eval(&result.params, &p.input) - p.measured;
             if e.is_finite() {
                 se += e * e;
                 sum += e;
                 n += 1;
+                inside += repeat_band.is_some_and(|b| e.abs() <= b) as usize;
             }
         }
         if n == 0 {
@@ -219,6 +290,8 @@ pub fn validate(result: &FitResult, other: &Dataset, opts: &FitOptions) -> Vec<V
             rmse,
             nrmse_pct: 100.0 * rmse / peak_abs(&sel.points),
             bias: sum / n as f64,
+            repeat_band,
+            in_repeat_band_pct: repeat_band.map(|_| 100.0 * inside as f64 / n as f64),
         });
     }
     out
