@@ -588,8 +588,9 @@ crate::ros_message!(ModelMap, "tyre_msgs", "ModelMap");
 
 /// `tyre_msgs/ModelState`: the live fit's model after the latest completed sweep.
 ///
-/// `Deserialize` is written out so that a state recorded before `maps_extrapolated` existed
-/// still decodes (nothing is then marked extrapolated): older logs stay readable.
+/// `Deserialize` is written out so that a state recorded before `maps_extrapolated` or
+/// `maps_repeat_band` existed still decodes (nothing is then marked extrapolated, no repeat band
+/// given): older logs stay readable.
 #[derive(Debug, Clone, PartialEq, Default, Serialize)]
 pub struct ModelState {
     /// stamp = rig time of the end of the sweep that triggered the update
@@ -627,6 +628,10 @@ pub struct ModelState {
     /// per map in `maps` order, one per grid point: outside the tested envelope (the value there
     /// is extrapolated); empty in a state recorded before the flag existed
     pub maps_extrapolated: Vec<bool>,
+    /// per map in `maps` order: the band for a repeat measurement, ± this around the map's value
+    /// holds 95 % of the stage's held-out residuals (channel units; NaN before the stage is
+    /// fitted); empty in a state recorded before it existed
+    pub maps_repeat_band: Vec<f64>,
 }
 
 impl ModelState {
@@ -635,11 +640,16 @@ impl ModelState {
         let start: usize = self.maps.iter().take(k).map(|m| m.value.len()).sum();
         self.maps_extrapolated.get(start + i).copied().unwrap_or(false)
     }
+
+    /// The band for a repeat measurement of `maps[k]` (NaN when the state has none).
+    pub fn repeat_band(&self, k: usize) -> f64 {
+        self.maps_repeat_band.get(k).copied().unwrap_or(f64::NAN)
+    }
 }
 
 impl<'de> Deserialize<'de> for ModelState {
     fn deserialize<D: serde::Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
-        const FIELDS: [&str; 17] = [
+        const FIELDS: [&str; 18] = [
             "header",
             "update_index",
             "sweeps_used",
@@ -657,6 +667,7 @@ impl<'de> Deserialize<'de> for ModelState {
             "grid_speed_mps",
             "maps",
             "maps_extrapolated",
+            "maps_repeat_band",
         ];
         struct V;
         impl<'de> serde::de::Visitor<'de> for V {
@@ -696,6 +707,9 @@ impl<'de> Deserialize<'de> for ModelState {
                 // markers, so "ended" shows as an error or as no element).
                 if let Ok(Some(flags)) = seq.next_element::<Vec<bool>>() {
                     st.maps_extrapolated = flags;
+                    if let Ok(Some(bands)) = seq.next_element::<Vec<f64>>() {
+                        st.maps_repeat_band = bands;
+                    }
                 }
                 Ok(st)
             }

@@ -102,6 +102,10 @@ def test_the_fit_node_publishes_a_model_after_every_segment_and_writes_it_at_the
     assert all(len(m.value) == grid and len(m.std) == grid for m in maps.values()), grid
     # Each map's grid points outside the tested envelope are flagged (read by the schema, not by us).
     assert len(after.maps_extrapolated) == grid * len(after.maps), (len(after.maps_extrapolated), grid)
+    # And the band for a repeat measurement, one per map: finite for the fitted FYW.
+    assert len(after.maps_repeat_band) == len(after.maps), after.maps_repeat_band
+    fyw_band = after.maps_repeat_band[[m.channel for m in after.maps].index("FYW")]
+    assert math.isfinite(fyw_band) and fyw_band > 0, after.maps_repeat_band
     assert any(math.isfinite(x) and x > 0 for x in maps["FYW"].std), "FYW has no finite uncertainty"
 
     # The model the node wrote at the end: an MF 6.1 property file and its fit report.

@@ -183,6 +183,12 @@ pub struct PredictionMap {
     pub extrapolated: Vec<bool>,
     /// The residual RMSE of the channel's stage (NaN before it is fitted).
     pub residual_rmse: f64,
+    /// The band for a repeat measurement, channel units: ± this holds 95 % of the stage's
+    /// held-out residuals (each sweep's as a fit without it leaves it: the linearised
+    /// leave-one-sweep-out of [`crate::form_error::held_out_values`]), at the split-conformal
+    /// rank of [`crate::stages::crossval::repeat_band`]. One width over the map; NaN before
+    /// the stage is fitted.
+    pub repeat_band: f64,
 }
 
 impl PredictionMap {
@@ -197,18 +203,23 @@ impl PredictionMap {
             std_form: vec![f64::NAN; n],
             extrapolated: vec![false; n],
             residual_rmse: f64::NAN,
+            repeat_band: f64::NAN,
         }
     }
 }
 
+/// What the held-out residuals of a map's stage give: the form error at every grid input, which
+/// inputs are extrapolated, and the band for a repeat measurement.
+struct HeldOutMap {
+    std_form: Vec<f64>,
+    extrapolated: Vec<bool>,
+    repeat_band: f64,
+}
+
 /// The form error of `channel` at every one of `inputs` ([`crate::form_error`]) from its
-/// residual stage's points, and which inputs are extrapolated; `None` without that stage's data.
-fn form_errors(
-    result: &FitResult,
-    channel: MapChannel,
-    inputs: &[MfInput],
-    threads: usize,
-) -> Option<(Vec<f64>, Vec<bool>)> {
+/// residual stage's points, which inputs are extrapolated, and the stage's band for a repeat
+/// measurement; `None` without that stage's data.
+fn form_errors(result: &FitResult, channel: MapChannel, inputs: &[MfInput], threads: usize) -> Option<HeldOutMap> {
     use crate::form_error::{FormError, SlipAxis};
     let d = result.data.iter().find(|d| d.stage == channel.residual_stage())?;
     let fitted = d.channel.values_at(&result.params, &d.points);
@@ -226,8 +237,13 @@ fn form_errors(
     };
     let regions = FormError::of(&d.points, &d.groups, &values, axis, result.nominal.fz0_n).over(inputs);
     let worst = regions.iter().filter(|r| r.tested).filter_map(|r| r.std).fold(0.0, f64::max);
-    let std = regions.iter().map(|r| if r.tested { r.std.unwrap_or(worst) } else { worst }).collect();
-    Some((std, regions.iter().map(|r| !r.tested).collect()))
+    let std_form = regions.iter().map(|r| if r.tested { r.std.unwrap_or(worst) } else { worst }).collect();
+    let held_out_errors = values.iter().zip(&d.points).map(|(v, p)| (v - p.measured).abs()).collect();
+    Some(HeldOutMap {
+        std_form,
+        extrapolated: regions.iter().map(|r| !r.tested).collect(),
+        repeat_band: crate::stages::crossval::repeat_band(held_out_errors),
+    })
 }
 
 /// ∂value/∂key of the stage's channel at its points (`fitted`: its values there), one row per
@@ -481,10 +497,23 @@ pub fn prediction_maps_since(
                 return m;
             }
             let std_param = c.stds(result, channel, &batch, threads);
-            let (std_form, extrapolated) = form_errors(result, channel, &inputs, threads)
-                .unwrap_or_else(|| (vec![0.0; inputs.len()], vec![false; inputs.len()]));
+            let held_out = form_errors(result, channel, &inputs, threads).unwrap_or_else(|| HeldOutMap {
+                std_form: vec![0.0; inputs.len()],
+                extrapolated: vec![false; inputs.len()],
+                repeat_band: f64::NAN,
+            });
+            let HeldOutMap { std_form, extrapolated, repeat_band } = held_out;
             let std = std_param.iter().zip(&std_form).map(|(a, b)| a.hypot(*b)).collect();
-            PredictionMap { channel, value, std, std_param, std_form, extrapolated, residual_rmse: c.residual_rmse() }
+            PredictionMap {
+                channel,
+                value,
+                std,
+                std_param,
+                std_form,
+                extrapolated,
+                residual_rmse: c.residual_rmse(),
+                repeat_band,
+            }
         })
         .collect()
 }
@@ -499,6 +528,10 @@ pub struct Coverage {
     pub points: usize,
     /// % of measured values inside ±1.96·√(σ_model² + RMSE²) (the band for a new measurement).
     pub measured_in_band_pct: f64,
+    /// The band for a repeat measurement ([`PredictionMap::repeat_band`]), channel units.
+    pub repeat_band: f64,
+    /// % of measured values inside ±`repeat_band` (predicted: 95 %).
+    pub measured_in_repeat_band_pct: f64,
     /// % of the reference model's values inside ±1.96·σ_model (the band of the mean), when a
     /// reference (the virtual rig's true tyre) is given.
     pub truth_in_band_pct: Option<f64>,
@@ -531,7 +564,8 @@ pub fn coverage(
         let Some(stage) = STAGES.iter().find(|s| s.name() == channel.residual_stage()) else { continue };
         let Some(sel) = stage.select(&ctx) else { continue };
         let ch = channel.channel();
-        let (mut n, mut inside, mut truth_inside) = (0usize, 0usize, 0usize);
+        let repeat_band = form_errors(result, channel, &[], 1).map_or(f64::NAN, |h| h.repeat_band);
+        let (mut n, mut inside, mut truth_inside, mut in_repeat) = (0usize, 0usize, 0usize, 0usize);
         let mut stds = Vec::with_capacity(sel.len());
         for p in &sel.points {
             let y = ch.eval(&result.params, &p.input);
@@ -545,6 +579,7 @@ pub fn coverage(
             if (p.measured - y).abs() <= band {
                 inside += 1;
             }
+            in_repeat += usize::from((p.measured - y).abs() <= repeat_band);
             if let Some(t) = truth
                 && (ch.eval_reference(t, &p.input) - y).abs() <= 1.96 * sd
             {
@@ -559,6 +594,8 @@ pub fn coverage(
             channel: channel.tydex_name().into(),
             points: n,
             measured_in_band_pct: pct(inside),
+            repeat_band,
+            measured_in_repeat_band_pct: pct(in_repeat),
             truth_in_band_pct: truth.map(|_| pct(truth_inside)),
             median_std: crate::starts::median(stds).unwrap_or(f64::NAN),
             residual_rmse: cov.residual_rmse,

@@ -63,6 +63,12 @@ pub struct Band {
     /// The prediction where the data reached, NaN where it is extrapolated (drawn over `value`,
     /// a Plot panel shows the measured part solid and breaks it where the model guesses).
     pub value_tested: Vec<f64>,
+    /// The band for a repeat measurement (± this holds 95 % of the stage's held-out residuals;
+    /// NaN when the state has none: before the stage is fitted, or recorded before it existed).
+    pub repeat_band: f64,
+    /// `value` ∓ `repeat_band`: where a new measurement is expected.
+    pub repeat_lower: Vec<f64>,
+    pub repeat_upper: Vec<f64>,
 }
 
 impl ModelView {
@@ -129,7 +135,11 @@ fn band(st: &ModelState, k: usize, map: &ModelMap) -> Option<Band> {
     // A state from before the flag existed has none: nothing is marked extrapolated.
     let extrapolated: Vec<bool> = (0..ns).map(|is| st.extrapolated(k, at(is))).collect();
     let value_tested = value.iter().zip(&extrapolated).map(|(v, x)| if *x { f64::NAN } else { *v }).collect();
+    let repeat_band = st.repeat_band(k);
     Some(Band {
+        repeat_lower: value.iter().map(|v| v - repeat_band).collect(),
+        repeat_upper: value.iter().map(|v| v + repeat_band).collect(),
+        repeat_band,
         channel: map.channel.clone(),
         slip_axis: map.slip_axis.clone(),
         fz_n: st.grid_fz_n[il],
@@ -158,7 +168,9 @@ pub(crate) const MODEL_SCHEMA: &str = r#"{"type":"object","properties":{
 "value":{"type":"array","items":{"type":"number"}},"lower":{"type":"array","items":{"type":"number"}},
 "upper":{"type":"array","items":{"type":"number"}},"std":{"type":"array","items":{"type":"number"}},
 "extrapolated":{"type":"array","items":{"type":"boolean"}},
-"value_tested":{"type":"array","items":{"type":"number"}}}}}}}"#;
+"value_tested":{"type":"array","items":{"type":"number"}},"repeat_band":{"type":"number"},
+"repeat_lower":{"type":"array","items":{"type":"number"}},
+"repeat_upper":{"type":"array","items":{"type":"number"}}}}}}}"#;
 
 #[cfg(test)]
 mod tests {
@@ -208,6 +220,7 @@ mod tests {
             grid_pressure_pa: pressures,
             maps: vec![map],
             maps_extrapolated,
+            maps_repeat_band: vec![2.5],
             ..ModelState::default()
         }
     }
@@ -238,6 +251,20 @@ mod tests {
         assert_eq!(b.extrapolated, vec![false, false, true]);
         assert_eq!(&b.value_tested[..2], &expect[..2]);
         assert!(b.value_tested[2].is_nan());
+    }
+
+    #[test]
+    fn the_band_for_a_repeat_measurement_is_drawn_around_the_curve() {
+        let b = &ModelView::of(&state()).bands[0];
+        assert_eq!(b.repeat_band, 2.5);
+        for ((v, lo), hi) in b.value.iter().zip(&b.repeat_lower).zip(&b.repeat_upper) {
+            assert_eq!((*lo, *hi), (v - 2.5, v + 2.5));
+        }
+        // A state recorded before the band existed draws none.
+        let mut st = state();
+        st.maps_repeat_band.clear();
+        let b = &ModelView::of(&st).bands[0];
+        assert!(b.repeat_band.is_nan() && b.repeat_upper.iter().all(|v| v.is_nan()));
     }
 
     #[test]

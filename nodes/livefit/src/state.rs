@@ -95,5 +95,6 @@ pub fn model_state(result: Option<&FitResult>, grid: Option<&EnvelopeGrid>, maps
         })
         .collect();
     st.maps_extrapolated = maps.iter().flat_map(|m| m.extrapolated.iter().copied()).collect();
+    st.maps_repeat_band = maps.iter().map(|m| m.repeat_band).collect();
     st
 }

@@ -79,6 +79,11 @@ fn live_fit_on_a_freerolling_run_matches_the_offline_fit_and_its_bands_hold() {
     let fy_extrapolated = (0..660).filter(|&i| last.extrapolated(k_fy, i)).count();
     assert_eq!(last.maps_extrapolated.len(), 660 * last.maps.len());
     assert!(fy_extrapolated > 0 && fy_extrapolated < 660, "{fy_extrapolated} of 660 extrapolated");
+    // Each map carries the band for a repeat measurement: finite where its stage is fitted.
+    assert_eq!(last.maps_repeat_band.len(), last.maps.len());
+    assert!(last.repeat_band(k_fy) > 0.0 && last.repeat_band(k_fy).is_finite(), "{:?}", last.maps_repeat_band);
+    let k_fx = last.maps.iter().position(|m| m.channel == "FX").unwrap();
+    assert!(last.repeat_band(k_fx).is_nan(), "FX is not fitted yet: {:?}", last.maps_repeat_band);
 
     // The same log replayed into a fresh core gives the same model states (the log reproduces it).
     let mut core = livefit::LiveFit::new(LiveFitConfig { fz0_n: Some(h.plan().fz0_n), ..LiveFitConfig::default() });

@@ -227,13 +227,15 @@ pub fn run(args: &LiveFitBench) -> anyhow::Result<()> {
         println!("predicted 95 % bands on {} (points the fit never saw):", h.display());
         for r in &rows {
             println!(
-                "  {:<4} {:>6} points: {:>5.1} % of measured values in the band ±1.96·√(σ²+RMSE²){}; median σ {:.3}, RMSE {:.3}",
+                "  {:<4} {:>6} points: {:>5.1} % of measured values in the band ±1.96·√(σ²+RMSE²){}; median σ {:.3}, RMSE {:.3}; {:.1} % within the repeat band ±{:.3} (predicted 95 %)",
                 r.channel,
                 r.points,
                 r.measured_in_band_pct,
                 r.truth_in_band_pct.map_or(String::new(), |p| format!(", {p:.1} % of true values in ±1.96·σ")),
                 r.median_std,
-                r.residual_rmse
+                r.residual_rmse,
+                r.measured_in_repeat_band_pct,
+                r.repeat_band
             );
         }
         coverage_json = serde_json::to_value(&rows)?;
