@@ -140,6 +140,51 @@ pub struct CandidateScore {
     pub form_corrected: bool,
     /// Which sweeps carry the held-out gain and which oppose it ([`SweepSupport`]).
     pub support: SweepSupport,
+    /// Not testable because its state is tied to the operating point: the largest share of the
+    /// state's variance any of its terms keeps at fixed operating points (under
+    /// [`linfit::MIN_PARTIALLED_SHARE`]).
+    pub tied_share: Option<f64>,
+}
+
+/// Why a state candidate has no fit to score.
+#[derive(Debug, Clone, Copy, PartialEq)]
+enum Unfitted {
+    /// No coefficient the data determine (no term reaches the data, or none beats its prior).
+    Undetermined,
+    /// Every term was screened out: where its factors act, the state is (nearly) a function
+    /// of the operating point ([`linfit::MIN_PARTIALLED_SHARE`]); the best term kept this
+    /// share of its state's variance at fixed operating points.
+    TiedToOperatingPoint { largest_share: f64 },
+}
+
+impl Unfitted {
+    /// Of two forms' reasons, the one that says more: the screen's, at the larger share.
+    fn either(self, other: Unfitted) -> Unfitted {
+        match (self, other) {
+            (
+                Unfitted::TiedToOperatingPoint { largest_share: a },
+                Unfitted::TiedToOperatingPoint { largest_share: b },
+            ) => Unfitted::TiedToOperatingPoint { largest_share: a.max(b) },
+            (t @ Unfitted::TiedToOperatingPoint { .. }, _) | (_, t @ Unfitted::TiedToOperatingPoint { .. }) => t,
+            _ => Unfitted::Undetermined,
+        }
+    }
+
+    /// The reason the report gives for `eff`.
+    fn reason(self, eff: Effect) -> String {
+        match self {
+            Unfitted::Undetermined => "no coefficient the data determine".to_owned(),
+            Unfitted::TiedToOperatingPoint { largest_share } => {
+                let (why, what) = revisit_hint(eff);
+                format!(
+                    "its state is tied to the operating point: where its factors act, it keeps {:.1} % of its variance \
+                     at fixed operating points ({:.0} % needed to fit it apart from them) — {why}; {what}",
+                    100.0 * largest_share,
+                    100.0 * linfit::MIN_PARTIALLED_SHARE
+                )
+            }
+        }
+    }
 }
 
 /// How a candidate's held-out gain is spread over the sweeps: what the block bootstrap's
@@ -598,6 +643,7 @@ impl Ctx<'_> {
             significant: false,
             form_corrected: false,
             support: SweepSupport::default(),
+            tied_share: None,
         };
         (s, None)
     }
@@ -612,10 +658,17 @@ impl Ctx<'_> {
         let fitted = if state::is_state_scaling(eff) {
             self.fit_state(&r.present, &r.lin, eff, fe)
         } else {
-            self.fit_nonlinear(r, eff, fe)
+            self.fit_nonlinear(r, eff, fe).ok_or(Unfitted::Undetermined)
         };
-        let Some((fit, k)) = fitted else {
-            return self.untestable(eff, 0.0, "no coefficient the data determine".to_owned());
+        let (fit, k) = match fitted {
+            Ok(f) => f,
+            Err(why) => {
+                let (mut s, none) = self.untestable(eff, 0.0, why.reason(eff));
+                if let Unfitted::TiedToOperatingPoint { largest_share } = why {
+                    s.tied_share = Some(largest_share);
+                }
+                return (s, none);
+            }
         };
         let fold_chi_before: Vec<f64> =
             self.fl.iter().map(|f| total(chi2(&self.meas, before_ho, &self.sigma, f))).collect();
@@ -687,6 +740,7 @@ impl Ctx<'_> {
             significant,
             form_corrected: fe.is_some(),
             support,
+            tied_share: None,
         };
         (s, Some(fit))
     }
@@ -727,7 +781,7 @@ impl Ctx<'_> {
         lin: &linfit::Linearization,
         eff: Effect,
         fe: Option<&FormError>,
-    ) -> Option<(CandidateFit, usize)> {
+    ) -> Result<(CandidateFit, usize), Unfitted> {
         let grid = self.ev.choice_grid(eff, self.cfg.form_correction);
         let whole = self.fit_state_as(model, lin, eff, fe, grid.clone());
         // A reduced form the data may tell apart from what the model holds when the whole one
@@ -739,8 +793,10 @@ impl Ctx<'_> {
         let reduced = self.fit_state_as(model, lin, eff, fe, reduced_grid);
         let heldout_chi2 = |f: &(CandidateFit, usize)| total(chi2(&self.meas, &f.0.pred_ho, &self.sigma, &self.all));
         match (whole, reduced) {
-            (Some(w), Some(r)) if heldout_chi2(&r) < heldout_chi2(&w) => Some(r),
-            (w, r) => w.or(r),
+            (Ok(w), Ok(r)) if heldout_chi2(&r) < heldout_chi2(&w) => Ok(r),
+            (Ok(w), _) => Ok(w),
+            (_, Ok(r)) => Ok(r),
+            (Err(a), Err(b)) => Err(a.either(b)),
         }
     }
 
@@ -753,9 +809,9 @@ impl Ctx<'_> {
         eff: Effect,
         fe: Option<&FormError>,
         grid: Vec<Choice>,
-    ) -> Option<(CandidateFit, usize)> {
+    ) -> Result<(CandidateFit, usize), Unfitted> {
         if state::terms(eff, self.coverage).is_empty() {
-            return None;
+            return Err(Unfitted::Undetermined);
         }
         let (present, fixed): (Vec<EffectParams>, Vec<EffectParams>) =
             model.iter().cloned().partition(|e| state::is_state_scaling(e.effect));
@@ -786,14 +842,19 @@ impl Ctx<'_> {
                 (c, linfit::chi2_after_solve(ev, &d, lin, &target_all, &self.sigma) + k * self.n_res.ln())
             })
             .min_by(|a, b| a.1.total_cmp(&b.1))
-            .map(|(c, _)| c)?;
+            .map(|(c, _)| c)
+            .ok_or(Unfitted::Undetermined)?;
         let slot = present.len();
         let terms = state::terms_for(eff, self.coverage, &choice);
-        let design = linfit::with_candidate(ev, &present, &pterms, eff, choice, terms);
-        let design = linfit::without_aliased(ev, design, lin, &self.sigma, slot);
+        let unscreened = linfit::with_candidate(ev, &present, &pterms, eff, choice, terms);
+        let largest_share = linfit::largest_partialled_share(ev, &unscreened, lin, &self.sigma, slot);
+        let design = linfit::without_aliased(ev, unscreened, lin, &self.sigma, slot);
+        if let Some(share) = largest_share.filter(|_| !design.cols.iter().any(|c| c.slot == slot)) {
+            return Err(Unfitted::TiedToOperatingPoint { largest_share: share });
+        }
         let k = linfit::determined_columns(ev, &design, lin, &self.sigma, slot) + Choice::n_knobs(eff);
         if k == Choice::n_knobs(eff) {
-            return None;
+            return Err(Unfitted::Undetermined);
         }
         let fitted = linfit::fit_all(ev, design, lin, &fixed, &target_all, &self.sigma);
         let sigma = &self.sigma;
@@ -826,7 +887,7 @@ impl Ctx<'_> {
             linfit::cross_validate(ev, &fitted.design, &fixed, &fitted.lin, &self.fl, &target_fold, &add_fold, sigma)
         };
         let model: Vec<EffectParams> = fixed.into_iter().chain(fitted.effects).collect();
-        Some((CandidateFit { model, pred_fit: fitted.lin.pred, pred_ho }, k))
+        Ok((CandidateFit { model, pred_fit: fitted.lin.pred, pred_ho }, k))
     }
 
     /// A nonlinear candidate (transient, the refits): Levenberg–Marquardt per fold, everything
@@ -1182,6 +1243,24 @@ impl Ctx<'_> {
                 ));
             }
         }
+        // Candidates whose every term the screen took (their state a function of the operating
+        // point where they act): not identifiable where the plain residual shows them.
+        for s in scores.iter().filter(|s| s.tied_share.is_some() && s.effect != Effect::Transient) {
+            let (plain, _) = self.score(r, s.effect, false, m_tests);
+            if plain.significant {
+                out.push(format!(
+                    "{} not identifiable from these logs: it explains {:.1} % of the held-out residual when the model's \
+                     operating-point misfit is left in, but where its factors act its state keeps only {:.1} % of its \
+                     variance at fixed operating points ({:.0} % needed to fit it apart from them) — {}; {}",
+                    s.effect.name(),
+                    100.0 * plain.evidence,
+                    100.0 * s.tied_share.unwrap_or(0.0),
+                    100.0 * linfit::MIN_PARTIALLED_SHARE,
+                    revisit_hint(s.effect).0,
+                    revisit_hint(s.effect).1
+                ));
+            }
+        }
         out
     }
 }
@@ -1297,7 +1376,7 @@ impl Ctx<'_> {
         // second specimen, docs/doctor.md).
         let given = full.present.iter().find(|e| e.effect == last).map(|e| e.parsed().choice);
         let grid = given.map_or_else(|| self.ev.choice_grid(last, self.cfg.form_correction), |c| vec![c]);
-        let (fit, _) = self.fit_state_as(&rest, &lin, last, full.form_error.as_ref(), grid)?;
+        let (fit, _) = self.fit_state_as(&rest, &lin, last, full.form_error.as_ref(), grid).ok()?;
         Some(fit.model)
     }
 
@@ -2083,7 +2162,24 @@ mod tests {
                 lost_chi2: -9_605.0,
                 ..Default::default()
             },
+            tied_share: None,
         }
+    }
+
+    #[test]
+    fn a_state_tied_to_the_operating_point_says_how_nearly_and_what_to_run() {
+        let tied = Unfitted::TiedToOperatingPoint { largest_share: 0.098 };
+        let reason = tied.reason(Effect::Wear);
+        assert!(reason.contains("keeps 9.8 % of its variance") && reason.contains("(10 % needed"), "{reason}");
+        assert!(
+            reason.ends_with("revisit a cell at another stage of the tyre's life (repeat a sweep late in the test)")
+        );
+        assert_eq!(Unfitted::Undetermined.reason(Effect::Wear), "no coefficient the data determine");
+        // Of two forms' reasons, the screen's at the larger share.
+        let other = Unfitted::TiedToOperatingPoint { largest_share: 0.05 };
+        assert_eq!(tied.either(other), tied);
+        assert_eq!(Unfitted::Undetermined.either(other), other);
+        assert_eq!(Unfitted::Undetermined.either(Unfitted::Undetermined), Unfitted::Undetermined);
     }
 
     #[test]

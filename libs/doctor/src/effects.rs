@@ -829,13 +829,33 @@ mod tests {
             state::Choice::default(),
             state::terms(Effect::Specimen, cov),
         );
-        let kept: Vec<Factor> = crate::linfit::without_aliased(&evp, design, &lin, &[20.0, 20.0, 2.0, 1e-4], 0)
-            .cols
-            .iter()
-            .map(|c| c.term.factor)
-            .collect();
+        let sigma = [20.0, 20.0, 2.0, 1e-4];
+        let largest = crate::linfit::largest_partialled_share(&evp, &design, &lin, &sigma, 0).expect("partialled");
+        let kept: Vec<Factor> =
+            crate::linfit::without_aliased(&evp, design, &lin, &sigma, 0).cols.iter().map(|c| c.term.factor).collect();
         assert!(!kept.contains(&Factor::MuX), "kept {kept:?}");
         assert!(kept.contains(&Factor::MuY) && kept.contains(&Factor::Ky), "kept {kept:?}");
+        assert!(largest >= crate::linfit::MIN_PARTIALLED_SHARE, "{largest}");
+        // With the λμx term alone, nothing is left to fit: the largest share says how nearly the
+        // plan ties the state to the operating point (what the report then tells the user).
+        let mux_only: Vec<Term> =
+            state::terms(Effect::Specimen, cov).into_iter().filter(|t| t.factor == Factor::MuX).collect();
+        assert!(!mux_only.is_empty());
+        let design =
+            crate::linfit::with_candidate(&evp, &[], &[], Effect::Specimen, state::Choice::default(), mux_only);
+        let largest = crate::linfit::largest_partialled_share(&evp, &design, &lin, &sigma, 0).expect("partialled");
+        assert!(largest < crate::linfit::MIN_PARTIALLED_SHARE, "{largest}");
+        assert!(crate::linfit::without_aliased(&evp, design, &lin, &sigma, 0).cols.is_empty());
+        // Where the effect is not partialled out, there is no screen and no share.
+        let design = crate::linfit::with_candidate(
+            &ev,
+            &[],
+            &[],
+            Effect::Specimen,
+            state::Choice::default(),
+            state::terms(Effect::Specimen, cov),
+        );
+        assert_eq!(crate::linfit::largest_partialled_share(&ev, &design, &lin, &sigma, 0), None);
     }
 
     #[test]

@@ -304,20 +304,49 @@ pub fn without_aliased(
     sigma: &[f64; 4],
     slot: usize,
 ) -> Design {
-    let Some(effect) = design.effects.get(slot).map(|e| e.effect) else { return design };
+    let Some(shares) = slot_shares(ev, &design, lin, sigma, slot) else { return design };
+    let keep = shares.iter().map(|s| s.is_none_or(|v| v >= MIN_PARTIALLED_SHARE));
+    let cols = design.cols.into_iter().zip(keep).filter(|(_, k)| *k).map(|(c, _)| c).collect();
+    Design { effects: design.effects, cols }
+}
+
+/// The largest share any column of `slot` keeps of its state's variance at fixed operating
+/// points (the screen of [`without_aliased`]); `None` where `ev` does not partial the effect
+/// out or the slot has no column. What a user is told when every column is screened out: how
+/// nearly the plan ties the state to the operating point.
+pub fn largest_partialled_share(
+    ev: &Evaluator<'_>,
+    design: &Design,
+    lin: &Linearization,
+    sigma: &[f64; 4],
+    slot: usize,
+) -> Option<f64> {
+    slot_shares(ev, design, lin, sigma, slot)?.into_iter().flatten().reduce(f64::max)
+}
+
+/// Per column of `design`, the share of [`column_share`] for the columns of `slot` (`None` for
+/// the others); `None` where `ev` does not partial the slot's effect out.
+fn slot_shares(
+    ev: &Evaluator<'_>,
+    design: &Design,
+    lin: &Linearization,
+    sigma: &[f64; 4],
+    slot: usize,
+) -> Option<Vec<Option<f64>>> {
+    let effect = design.effects.get(slot).map(|e| e.effect)?;
     if !ev.partialled(effect) {
-        return design;
+        return None;
     }
     let choice = design.effects[slot].parsed().choice;
     // The state's own values, as given and with the operating point's share taken out, by
     // basis (see [`state_basis`]).
     let mut cache: Vec<(u8, Vec<f64>, Vec<f64>)> = Vec::new();
-    let keep: Vec<bool> = design
+    let shares = design
         .cols
         .iter()
         .map(|c| {
             if c.slot != slot {
-                return true;
+                return None;
             }
             let b = state_basis(effect, c.term.basis);
             let at = match cache.iter().position(|(cb, _, _)| *cb == b) {
@@ -328,11 +357,10 @@ pub fn without_aliased(
                 }
             };
             let (_, raw, left) = &cache[at];
-            column_share(lin, sigma, raw, left, c.term.factor) >= MIN_PARTIALLED_SHARE
+            Some(column_share(lin, sigma, raw, left, c.term.factor))
         })
         .collect();
-    let cols = design.cols.into_iter().zip(keep).filter(|(_, k)| *k).map(|(c, _)| c).collect();
-    Design { effects: design.effects, cols }
+    Some(shares)
 }
 
 /// The basis whose values are the state itself, for the screen of [`without_aliased`]: whether
