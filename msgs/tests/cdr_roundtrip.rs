@@ -158,28 +158,35 @@ struct ModelStateV1 {
     maps: Vec<ModelMap>,
 }
 
+impl ModelStateV1 {
+    /// `now` as a state of before `maps_extrapolated` held it.
+    fn of(now: &ModelState) -> Self {
+        ModelStateV1 {
+            header: now.header.clone(),
+            update_index: now.update_index,
+            sweeps_used: now.sweeps_used,
+            segments_used: now.segments_used,
+            last_sweep: now.last_sweep.clone(),
+            final_update: now.final_update,
+            update_wall_s: now.update_wall_s,
+            error: now.error.clone(),
+            stages: now.stages.clone(),
+            grid_fz_n: now.grid_fz_n.clone(),
+            grid_slip_angle_deg: now.grid_slip_angle_deg.clone(),
+            grid_slip_ratio: now.grid_slip_ratio.clone(),
+            grid_camber_deg: now.grid_camber_deg.clone(),
+            grid_pressure_pa: now.grid_pressure_pa.clone(),
+            grid_speed_mps: now.grid_speed_mps,
+            maps: now.maps.clone(),
+        }
+    }
+}
+
 #[test]
 fn a_model_state_from_an_older_log_still_decodes_with_nothing_extrapolated() {
     let now: ModelState = exemplar(3).unwrap();
     assert!(!now.maps_extrapolated.is_empty());
-    let old = ModelStateV1 {
-        header: now.header.clone(),
-        update_index: now.update_index,
-        sweeps_used: now.sweeps_used,
-        segments_used: now.segments_used,
-        last_sweep: now.last_sweep.clone(),
-        final_update: now.final_update,
-        update_wall_s: now.update_wall_s,
-        error: now.error.clone(),
-        stages: now.stages.clone(),
-        grid_fz_n: now.grid_fz_n.clone(),
-        grid_slip_angle_deg: now.grid_slip_angle_deg.clone(),
-        grid_slip_ratio: now.grid_slip_ratio.clone(),
-        grid_camber_deg: now.grid_camber_deg.clone(),
-        grid_pressure_pa: now.grid_pressure_pa.clone(),
-        grid_speed_mps: now.grid_speed_mps,
-        maps: now.maps.clone(),
-    };
+    let old = ModelStateV1::of(&now);
     let bytes = to_cdr_with_header(&old).unwrap();
     let back: ModelState = from_cdr_with_header(&bytes).unwrap();
     assert_eq!(back, ModelState { maps_extrapolated: Vec::new(), maps_repeat_band: Vec::new(), ..now.clone() });
@@ -207,27 +214,7 @@ struct ModelStateV2 {
 fn a_model_state_from_before_the_repeat_band_still_decodes_without_one() {
     let now: ModelState = exemplar(5).unwrap();
     assert!(!now.maps_repeat_band.is_empty() && !now.maps_extrapolated.is_empty());
-    let old = ModelStateV2 {
-        v1: ModelStateV1 {
-            header: now.header.clone(),
-            update_index: now.update_index,
-            sweeps_used: now.sweeps_used,
-            segments_used: now.segments_used,
-            last_sweep: now.last_sweep.clone(),
-            final_update: now.final_update,
-            update_wall_s: now.update_wall_s,
-            error: now.error.clone(),
-            stages: now.stages.clone(),
-            grid_fz_n: now.grid_fz_n.clone(),
-            grid_slip_angle_deg: now.grid_slip_angle_deg.clone(),
-            grid_slip_ratio: now.grid_slip_ratio.clone(),
-            grid_camber_deg: now.grid_camber_deg.clone(),
-            grid_pressure_pa: now.grid_pressure_pa.clone(),
-            grid_speed_mps: now.grid_speed_mps,
-            maps: now.maps.clone(),
-        },
-        maps_extrapolated: now.maps_extrapolated.clone(),
-    };
+    let old = ModelStateV2 { v1: ModelStateV1::of(&now), maps_extrapolated: now.maps_extrapolated.clone() };
     let back: ModelState = from_cdr_with_header(&to_cdr_with_header(&old).unwrap()).unwrap();
     assert_eq!(back, ModelState { maps_repeat_band: Vec::new(), ..now.clone() });
     assert!(back.repeat_band(0).is_nan());
