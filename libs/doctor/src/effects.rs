@@ -922,6 +922,21 @@ mod tests {
         close(&recover_state(Effect::BreakIn, choice, &truth), &want, 0.05);
     }
 
+    /// A new tyre never grips more than a broken-in one: break-in's grip term is fitted where
+    /// the new tyre's grip is lower, and held at zero where the data would have it higher (grip
+    /// falling as the tyre slides is wear's or heat's, not a break-in's), while its shape term is
+    /// still fitted (there it takes what it can of the surplus).
+    #[test]
+    fn break_in_grip_only_lowers_a_new_tyres_grip() {
+        let choice = state::Choice { energy_kj: 100.0, threshold_w: 5_000.0, ..state::Choice::default() };
+        let deficit = [(t(Factor::MuY, 0), -0.12), (t(Factor::Cy, 0), 0.05)];
+        close(&recover_state(Effect::BreakIn, choice, &deficit), &[-0.12, 0.05], 0.05);
+        let surplus = [(t(Factor::MuY, 0), 0.12), (t(Factor::Cy, 0), 0.05)];
+        let got = recover_state(Effect::BreakIn, choice, &surplus);
+        assert_eq!(got[0], 0.0, "grip {got:?}");
+        assert!(got[1] != 0.0, "shape {got:?}");
+    }
+
     #[test]
     fn speed_extension_recovers_its_coefficients() {
         let truth = [(t(Factor::MuY, 0), -0.05), (t(Factor::Ky, 0), 0.04)];

@@ -401,7 +401,13 @@ impl Sign {
 }
 
 /// The sign a term's coefficient must keep, where physics fixes one: a worn tyre's loaded
-/// radius only shrinks (tread is lost, never gained).
+/// radius only shrinks (tread is lost, never gained); a new tyre's grip is never above its
+/// broken-in grip, so break-in's grip terms (each stage's λμx, λμy and the force level, on a
+/// basis that is largest on the new tyre) only lower it. Left free, a break-in whose slow stage
+/// lowered grip as the tyre slid stood in for wear: on a third tyre's TTC-style runs with an
+/// outsider's wear hidden (`doctor_cli::a_third_tyres_ttc_runs_…`) `break_in` was named,
+/// λμx e^−0.93 on its slow stage. Its stiffness and shape terms stay free: a new tread can be
+/// stiffer or softer.
 ///
 /// Thermal's radius slope is left free although a hotter tyre's radius only grows: bounded, it
 /// named wear rightly on a Square Matrix run (where it had shrunk the radius by 0.165 mm per
@@ -411,6 +417,7 @@ impl Sign {
 pub fn sign_bound(effect: Effect, t: Term) -> Option<Sign> {
     match (effect, t.factor, t.basis) {
         (Effect::Wear, Factor::Radius, 0) => Some(Sign::NonPositive),
+        (Effect::BreakIn, Factor::MuX | Factor::MuY | Factor::Force, _) => Some(Sign::NonPositive),
         _ => None,
     }
 }

@@ -85,6 +85,24 @@ pub struct FixtureSpec {
     /// gap as it is swept (by e⁻¹ every 1.2 sweep durations of sweeping): a run begun on a cold
     /// tyre; 0 for a tyre brought to temperature before the file begins.
     pub cold_start_k: f64,
+    /// The tread heated by sliding, as real runs' lasers read it; `None`: the lasers read a
+    /// plain ramp through the run (and `cold_start_k`).
+    pub tread_heating: Option<TreadHeating>,
+}
+
+/// A tread surface heated by the power it slides with: dT/dt = gain·P − (T − T_base)/τ, P the
+/// sliding power |FY·V·sin α| + |FX·κ·V|, T_base climbing linearly through the run (the
+/// carcass and the room warming). Real runs' tread temperatures rise in each sweep, most at high
+/// load and slip, and fall back between sweeps (`../shared/real-rig-data.md`); a plain ramp in
+/// time ties the temperature to the order the cells are run in, which no rig's does.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct TreadHeating {
+    /// T_base at the start and at the end of the run, °C.
+    pub base_c: [f64; 2],
+    /// Heating per unit of sliding power, K/s per kW.
+    pub k_per_kj: f64,
+    /// Time constant of the surface's cooling towards T_base, s.
+    pub cooling_s: f64,
 }
 
 /// A camber sweep: camber stepped at a held slip angle.
@@ -132,6 +150,7 @@ impl FixtureSpec {
             no_settle_after_sweeps: false,
             kappa_reach: 0.2,
             cold_start_k: 0.0,
+            tread_heating: None,
         }
     }
 
@@ -156,6 +175,44 @@ impl FixtureSpec {
             no_settle_after_sweeps: false,
             kappa_reach: 0.2,
             cold_start_k: 0.0,
+            tread_heating: None,
+        }
+    }
+}
+
+impl FixtureSpec {
+    /// A race tyre's cornering run laid out as real TTC cornering runs are
+    /// (`../shared/real-rig-data.md`): four pressures (70 / 84 / 98 / 112 kPa), at each two
+    /// conditioning sweeps at 1,100 N, then ±12° sweeps of 25 s at 1,100 / 1,540 / 660 / 220 /
+    /// 440 N and 1,100 N again; the load wandering up to 15 % through each sweep, as some rounds'
+    /// load control does; the tread heated by sliding on a base warming from 40 to 45 °C.
+    pub fn race_cornering_heated() -> Self {
+        Self {
+            pressures_kpa: vec![70.0, 84.0, 98.0, 112.0],
+            loads_n: vec![1100.0, 1540.0, 660.0, 220.0, 440.0],
+            sweep_s: 25.0,
+            fz_wander: 0.15,
+            seed: 2,
+            tread_heating: Some(TreadHeating { base_c: [40.0, 45.0], k_per_kj: 0.5, cooling_s: 20.0 }),
+            ..Self::cornering()
+        }
+    }
+
+    /// The drive/brake/combined run of the same tyre, laid out as real ones are: one pressure
+    /// (84 kPa), five full warm-up sweeps at 1,100 N, then slip-ratio sweeps to ±0.2 of 6 s at
+    /// cambers 0 / 2 / 4°, slip angles 0 / 3 / 6° and loads 220 / 660 / 1,540 / 1,100 N, and
+    /// 220 N again at the end; the tread heated by sliding on a base warming from 50 to 70 °C.
+    pub fn race_drive_brake_heated() -> Self {
+        Self {
+            pressures_kpa: vec![84.0],
+            loads_n: vec![220.0, 660.0, 1540.0, 1100.0],
+            cambers_deg: vec![0.0, 2.0, 4.0],
+            slip_angles_deg: vec![0.0, 3.0, 6.0],
+            sweep_s: 6.0,
+            warmup_sweeps: 5,
+            seed: 102,
+            tread_heating: Some(TreadHeating { base_c: [50.0, 70.0], k_per_kj: 0.5, cooling_s: 20.0 }),
+            ..Self::drive_brake()
         }
     }
 }
@@ -391,6 +448,8 @@ fn tabulate(spec: &FixtureSpec, rows: &[(f64, State)]) -> ChannelTable {
     let n = rows.len();
     let mut c: Vec<Vec<f64>> = (0..23).map(|_| Vec::with_capacity(n)).collect();
     let t_end = rows.last().map(|r| r.0).unwrap_or(1.0).max(1.0);
+    let mut surface_c = spec.tread_heating.map_or(f64::NAN, |h| h.base_c[0]);
+    let mut last_t = rows.first().map_or(0.0, |r| r.0);
     for (t, s) in rows {
         let fz = s.fz_n + nz.normal(8.0);
         let alpha = (-s.sa_deg).to_radians(); // ISO-W
@@ -423,8 +482,21 @@ fn tabulate(spec: &FixtureSpec, rows: &[(f64, State)]) -> ChannelTable {
         // angles, about −0.07 at 12° and 2 kN), besides its offset and noise.
         let sr_free = -0.01 - 0.07 * (s.sa_deg / 12.0).powi(2) * (fz / 2000.0);
         let sr = if rolling { kappa + sr_free + nz.normal(0.006) } else { -0.9 + nz.normal(0.01) };
-        let temp = 45.0 + 11.0 * t / t_end + if spec.cornering { 0.0 } else { 40.0 * t / t_end - 7.0 }
-            - spec.cold_start_k * (-s.swept_s / (1.2 * spec.sweep_s)).exp();
+        let temp = match spec.tread_heating {
+            Some(h) => {
+                let dt = (t - last_t).max(0.0);
+                let base = h.base_c[0] + (h.base_c[1] - h.base_c[0]) * t / t_end;
+                let speed = s.v_kph / 3.6;
+                let power_kw = ((fy * speed * alpha.sin()).abs() + (fx * kappa * speed).abs()) / 1000.0;
+                surface_c += dt * (h.k_per_kj * power_kw - (surface_c - base) / h.cooling_s.max(dt));
+                surface_c
+            }
+            None => {
+                45.0 + 11.0 * t / t_end + if spec.cornering { 0.0 } else { 40.0 * t / t_end - 7.0 }
+                    - spec.cold_start_k * (-s.swept_s / (1.2 * spec.sweep_s)).exp()
+            }
+        };
+        last_t = *t;
         // SAE as written: FY, FZ, SA, MZ flip.
         let vals = [
             *t,
