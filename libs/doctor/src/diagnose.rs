@@ -140,10 +140,12 @@ pub struct CandidateScore {
     pub form_corrected: bool,
     /// Which sweeps carry the held-out gain and which oppose it ([`SweepSupport`]).
     pub support: SweepSupport,
-    /// Not testable because its state is tied to the operating point: the largest share of the
-    /// state's variance any of its terms keeps at fixed operating points (under
-    /// [`linfit::MIN_PARTIALLED_SHARE`]).
+    /// Not testable because its state is tied to the operating point: the share of the state's
+    /// variance its term nearest to passing keeps at fixed operating points
+    /// ([`linfit::largest_partialled_share`]).
     pub tied_share: Option<f64>,
+    /// The share that term needed ([`linfit::min_partialled_share`]).
+    pub tied_share_needed: Option<f64>,
 }
 
 /// Why a state candidate has no fit to score.
@@ -154,18 +156,17 @@ enum Unfitted {
     /// Every term was screened out: where its factors act, the state is (nearly) a function
     /// of the operating point ([`linfit::MIN_PARTIALLED_SHARE`]); the best term kept this
     /// share of its state's variance at fixed operating points.
-    TiedToOperatingPoint { largest_share: f64 },
+    TiedToOperatingPoint(linfit::PartialledShare),
 }
 
 impl Unfitted {
     /// Of two forms' reasons, the one that says more: the screen's, at the larger share.
     fn either(self, other: Unfitted) -> Unfitted {
         match (self, other) {
-            (
-                Unfitted::TiedToOperatingPoint { largest_share: a },
-                Unfitted::TiedToOperatingPoint { largest_share: b },
-            ) => Unfitted::TiedToOperatingPoint { largest_share: a.max(b) },
-            (t @ Unfitted::TiedToOperatingPoint { .. }, _) | (_, t @ Unfitted::TiedToOperatingPoint { .. }) => t,
+            (Unfitted::TiedToOperatingPoint(a), Unfitted::TiedToOperatingPoint(b)) => {
+                Unfitted::TiedToOperatingPoint(if a.share / a.needed >= b.share / b.needed { a } else { b })
+            }
+            (t @ Unfitted::TiedToOperatingPoint(_), _) | (_, t @ Unfitted::TiedToOperatingPoint(_)) => t,
             _ => Unfitted::Undetermined,
         }
     }
@@ -174,13 +175,13 @@ impl Unfitted {
     fn reason(self, eff: Effect) -> String {
         match self {
             Unfitted::Undetermined => "no coefficient the data determine".to_owned(),
-            Unfitted::TiedToOperatingPoint { largest_share } => {
+            Unfitted::TiedToOperatingPoint(linfit::PartialledShare { share, needed }) => {
                 let (why, what) = revisit_hint(eff);
                 format!(
                     "its state is tied to the operating point: where its factors act, it keeps {:.2} % of its variance \
                      at fixed operating points ({:.0} % needed to fit it apart from them) — {why}; {what}",
-                    100.0 * largest_share,
-                    100.0 * linfit::MIN_PARTIALLED_SHARE
+                    100.0 * share,
+                    100.0 * needed
                 )
             }
         }
@@ -644,6 +645,7 @@ impl Ctx<'_> {
             form_corrected: false,
             support: SweepSupport::default(),
             tied_share: None,
+            tied_share_needed: None,
         };
         (s, None)
     }
@@ -664,8 +666,9 @@ impl Ctx<'_> {
             Ok(f) => f,
             Err(why) => {
                 let (mut s, none) = self.untestable(eff, 0.0, why.reason(eff));
-                if let Unfitted::TiedToOperatingPoint { largest_share } = why {
-                    s.tied_share = Some(largest_share);
+                if let Unfitted::TiedToOperatingPoint(tied) = why {
+                    s.tied_share = Some(tied.share);
+                    s.tied_share_needed = Some(tied.needed);
                 }
                 return (s, none);
             }
@@ -741,6 +744,7 @@ impl Ctx<'_> {
             form_corrected: fe.is_some(),
             support,
             tied_share: None,
+            tied_share_needed: None,
         };
         (s, Some(fit))
     }
@@ -850,7 +854,7 @@ impl Ctx<'_> {
         let largest_share = linfit::largest_partialled_share(ev, &unscreened, lin, &self.sigma, slot);
         let design = linfit::without_aliased(ev, unscreened, lin, &self.sigma, slot);
         if let Some(share) = largest_share.filter(|_| !design.cols.iter().any(|c| c.slot == slot)) {
-            return Err(Unfitted::TiedToOperatingPoint { largest_share: share });
+            return Err(Unfitted::TiedToOperatingPoint(share));
         }
         let k = linfit::determined_columns(ev, &design, lin, &self.sigma, slot) + Choice::n_knobs(eff);
         if k == Choice::n_knobs(eff) {
@@ -1255,7 +1259,7 @@ impl Ctx<'_> {
                     s.effect.name(),
                     100.0 * plain.evidence,
                     100.0 * s.tied_share.unwrap_or(0.0),
-                    100.0 * linfit::MIN_PARTIALLED_SHARE,
+                    100.0 * s.tied_share_needed.unwrap_or(linfit::MIN_PARTIALLED_SHARE),
                     revisit_hint(s.effect).0,
                     revisit_hint(s.effect).1
                 ));
@@ -2163,6 +2167,7 @@ mod tests {
                 ..Default::default()
             },
             tied_share: None,
+            tied_share_needed: None,
         }
     }
 
@@ -2170,16 +2175,22 @@ mod tests {
     fn a_state_tied_to_the_operating_point_says_how_nearly_and_what_to_run() {
         // Two decimals: a share of 0.0999 (the benchmark's brush race TTC-style break_in/s1) must
         // not read as the 10 % it falls short of.
-        let tied = Unfitted::TiedToOperatingPoint { largest_share: 0.0999 };
+        let tied = Unfitted::TiedToOperatingPoint(linfit::PartialledShare { share: 0.0999, needed: 0.1 });
         let reason = tied.reason(Effect::Wear);
         assert!(reason.contains("keeps 9.99 % of its variance") && reason.contains("(10 % needed"), "{reason}");
         assert!(
             reason.ends_with("revisit a cell at another stage of the tyre's life (repeat a sweep late in the test)")
         );
         assert_eq!(Unfitted::Undetermined.reason(Effect::Wear), "no coefficient the data determine");
-        // Of two forms' reasons, the screen's at the larger share.
-        let other = Unfitted::TiedToOperatingPoint { largest_share: 0.05 };
+        // Wear's radius needs less (its sign is bound): the share it needs is the one told.
+        let radius = Unfitted::TiedToOperatingPoint(linfit::PartialledShare { share: 0.0412, needed: 0.05 });
+        assert!(
+            radius.reason(Effect::Wear).contains("keeps 4.12 % of its variance at fixed operating points (5 % needed")
+        );
+        // Of two forms' reasons, the screen's nearer to passing for what it needs.
+        let other = Unfitted::TiedToOperatingPoint(linfit::PartialledShare { share: 0.05, needed: 0.1 });
         assert_eq!(tied.either(other), tied);
+        assert_eq!(other.either(radius), radius);
         assert_eq!(Unfitted::Undetermined.either(other), other);
         assert_eq!(Unfitted::Undetermined.either(Unfitted::Undetermined), Unfitted::Undetermined);
     }

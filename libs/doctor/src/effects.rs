@@ -830,7 +830,8 @@ mod tests {
             state::terms(Effect::Specimen, cov),
         );
         let sigma = [20.0, 20.0, 2.0, 1e-4];
-        let largest = crate::linfit::largest_partialled_share(&evp, &design, &lin, &sigma, 0).expect("partialled");
+        let largest =
+            crate::linfit::largest_partialled_share(&evp, &design, &lin, &sigma, 0).expect("partialled").share;
         let kept: Vec<Factor> =
             crate::linfit::without_aliased(&evp, design, &lin, &sigma, 0).cols.iter().map(|c| c.term.factor).collect();
         assert!(!kept.contains(&Factor::MuX), "kept {kept:?}");
@@ -843,7 +844,8 @@ mod tests {
         assert!(!mux_only.is_empty());
         let design =
             crate::linfit::with_candidate(&evp, &[], &[], Effect::Specimen, state::Choice::default(), mux_only);
-        let largest = crate::linfit::largest_partialled_share(&evp, &design, &lin, &sigma, 0).expect("partialled");
+        let largest =
+            crate::linfit::largest_partialled_share(&evp, &design, &lin, &sigma, 0).expect("partialled").share;
         assert!(largest < crate::linfit::MIN_PARTIALLED_SHARE, "{largest}");
         assert!(crate::linfit::without_aliased(&evp, design, &lin, &sigma, 0).cols.is_empty());
         // Where the effect is not partialled out, there is no screen and no share.

@@ -292,6 +292,20 @@ pub fn determined_columns(
 /// at e^191 and the final model's FX RMS at 1,622 N).
 pub const MIN_PARTIALLED_SHARE: f64 = 0.1;
 
+/// The least share [`without_aliased`] asks of a term: [`MIN_PARTIALLED_SHARE`], and
+/// [`MIN_WEAR_RADIUS_SHARE`] for wear's radius.
+pub fn min_partialled_share(effect: Effect, term: Term) -> f64 {
+    match (effect, term.factor) {
+        (Effect::Wear, state::Factor::Radius) => MIN_WEAR_RADIUS_SHARE,
+        _ => MIN_PARTIALLED_SHARE,
+    }
+}
+
+/// The least share for wear's radius term: tread loss is wear's one sure sign, and the term only
+/// shrinks the radius ([`state::sign_bound`]), so what a thermal effect does to the radius
+/// (a warming tyre's pressure rises and its radius grows) cannot pass for it.
+pub const MIN_WEAR_RADIUS_SHARE: f64 = 0.05;
+
 /// The design without the columns of `slot` whose state, where their factor acts, is
 /// (nearly) fixed by the operating point ([`MIN_PARTIALLED_SHARE`]; the state's own share
 /// decides for every function of it, [`state_basis`], and a factor of several components by
@@ -305,23 +319,44 @@ pub fn without_aliased(
     slot: usize,
 ) -> Design {
     let Some(shares) = slot_shares(ev, &design, lin, sigma, slot) else { return design };
-    let keep = shares.iter().map(|s| s.is_none_or(|v| v >= MIN_PARTIALLED_SHARE));
+    let effect = design.effects[slot].effect;
+    let keep: Vec<bool> = design
+        .cols
+        .iter()
+        .zip(&shares)
+        .map(|(c, s)| s.is_none_or(|v| v >= min_partialled_share(effect, c.term)))
+        .collect();
     let cols = design.cols.into_iter().zip(keep).filter(|(_, k)| *k).map(|(c, _)| c).collect();
     Design { effects: design.effects, cols }
 }
 
-/// The largest share any column of `slot` keeps of its state's variance at fixed operating
-/// points (the screen of [`without_aliased`]); `None` where `ev` does not partial the effect
-/// out or the slot has no column. What a user is told when every column is screened out: how
-/// nearly the plan ties the state to the operating point.
+/// A share of a state's variance left at fixed operating points ([`without_aliased`]) and the
+/// share its term needs ([`min_partialled_share`]).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct PartialledShare {
+    /// The share kept.
+    pub share: f64,
+    /// The share needed to fit the term.
+    pub needed: f64,
+}
+
+/// Of the columns of `slot`, the share of the one nearest to passing the screen of
+/// [`without_aliased`] (the largest share for what it needs); `None` where `ev` does not partial
+/// the effect out or the slot has no column. What a user is told when every column is screened
+/// out: how nearly the plan ties the state to the operating point.
 pub fn largest_partialled_share(
     ev: &Evaluator<'_>,
     design: &Design,
     lin: &Linearization,
     sigma: &[f64; 4],
     slot: usize,
-) -> Option<f64> {
-    slot_shares(ev, design, lin, sigma, slot)?.into_iter().flatten().reduce(f64::max)
+) -> Option<PartialledShare> {
+    let effect = design.effects.get(slot)?.effect;
+    slot_shares(ev, design, lin, sigma, slot)?
+        .into_iter()
+        .zip(&design.cols)
+        .filter_map(|(s, c)| Some(PartialledShare { share: s?, needed: min_partialled_share(effect, c.term) }))
+        .max_by(|a, b| (a.share / a.needed).total_cmp(&(b.share / b.needed)))
 }
 
 /// Per column of `design`, the share of [`column_share`] for the columns of `slot` (`None` for
