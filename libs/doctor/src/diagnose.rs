@@ -154,13 +154,14 @@ enum Unfitted {
     /// No coefficient the data determine (no term reaches the data, or none beats its prior).
     Undetermined,
     /// Every term was screened out: where its factors act, the state is (nearly) a function
-    /// of the operating point ([`linfit::MIN_PARTIALLED_SHARE`]); the best term kept this
-    /// share of its state's variance at fixed operating points.
+    /// of the operating point ([`linfit::min_partialled_share`]); the term nearest to passing
+    /// kept this share of its state's variance at fixed operating points.
     TiedToOperatingPoint(linfit::PartialledShare),
 }
 
 impl Unfitted {
-    /// Of two forms' reasons, the one that says more: the screen's, at the larger share.
+    /// Of two forms' reasons, the one that says more: the screen's, nearer to passing for what
+    /// its term needs.
     fn either(self, other: Unfitted) -> Unfitted {
         match (self, other) {
             (Unfitted::TiedToOperatingPoint(a), Unfitted::TiedToOperatingPoint(b)) => {

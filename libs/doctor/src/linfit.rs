@@ -307,7 +307,7 @@ pub fn min_partialled_share(effect: Effect, term: Term) -> f64 {
 pub const MIN_WEAR_RADIUS_SHARE: f64 = 0.05;
 
 /// The design without the columns of `slot` whose state, where their factor acts, is
-/// (nearly) fixed by the operating point ([`MIN_PARTIALLED_SHARE`]; the state's own share
+/// (nearly) fixed by the operating point ([`min_partialled_share`]; the state's own share
 /// decides for every function of it, [`state_basis`], and a factor of several components by
 /// its best one, [`column_share`]). Only where `ev` partials the effect out; otherwise the
 /// design as it is.

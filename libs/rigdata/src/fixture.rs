@@ -178,9 +178,7 @@ impl FixtureSpec {
             tread_heating: None,
         }
     }
-}
 
-impl FixtureSpec {
     /// A race tyre's cornering run laid out as real TTC cornering runs are
     /// (`../shared/real-rig-data.md`): four pressures (70 / 84 / 98 / 112 kPa), at each two
     /// conditioning sweeps at 1,100 N, then ±12° sweeps of 25 s at 1,100 / 1,540 / 660 / 220 /
